@@ -1,0 +1,41 @@
+"""symmech: symbolic geometric mechanics.
+
+Declare a mechanical system (coordinates, kinetic metric, potential, linear constraints,
+a frame of quasi-velocities, walls) and derive its geometry, constrained dynamics and
+impact laws in closed form.
+
+>>> import sympy as sp, symmech as sm
+>>> r, th = sm.coordinates("r theta")
+>>> scene = sm.Scene((r, th), metric=sp.diag(1, r**2))
+>>> scene.christoffel()[0, 1, 1]   # Gamma^r_theta,theta of polar coordinates
+-r
+"""
+
+from symmech.declaration import shapes
+from symmech.declaration.expressions import parse_expression
+from symmech.declaration.symbols import coordinates, t, velocities
+from symmech.declaration.wall import Wall
+from symmech.errors import ExpressionError, ImpactError, SceneError, SymmechError
+from symmech.geometry.lie import bracket_rank, hat, is_involutive, lie_bracket
+from symmech.scene import Scene
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ExpressionError",
+    "ImpactError",
+    "Scene",
+    "SceneError",
+    "SymmechError",
+    "Wall",
+    "__version__",
+    "bracket_rank",
+    "coordinates",
+    "hat",
+    "is_involutive",
+    "lie_bracket",
+    "parse_expression",
+    "shapes",
+    "t",
+    "velocities",
+]

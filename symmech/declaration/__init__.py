@@ -1,0 +1,1 @@
+"""Declaration layer: symbols, safe expressions, walls, and the validated scene declaration."""

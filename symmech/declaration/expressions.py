@@ -1,0 +1,850 @@
+"""Safe parsing of expression strings into sympy expressions.
+
+Scene files and the Python API accept expressions as strings (``"m*(xdot**2 + ydot**2)/2"``).
+Such a string is *never* handed to ``eval``, ``exec``, ``compile`` (other than to build an
+AST), ``sympify``, ``parse_expr`` or any other sympy parser.  It is parsed by
+``ast.parse(text, mode="eval")`` and the tree is checked against a whitelist before a sympy
+expression is built from it, node by node:
+
+* numbers: ``int`` literals become :class:`sympy.Integer`, ``float`` literals become
+  :class:`sympy.Float` (``sympy.Float(value)``, 53-bit, as ``sympy.sympify`` gives for a
+  Python float; write ``1/10`` rather than ``0.1`` for an exact rational).  Complex, boolean,
+  ``None``, string and bytes literals are refused;
+* names: the keys of the ``symbols`` mapping given by the caller, then the constants
+  ``pi`` and ``E`` (:data:`ALLOWED_CONSTANTS`) unless a symbol of that name shadows them;
+* the operators ``+ - * / **`` and unary ``-`` and ``+``; parentheses;
+* calls of the smooth functions of :data:`ALLOWED_FUNCTIONS`, with positional arguments
+  only, in the right number.  In call position a name always means the function (a symbol
+  named ``sin`` is still usable as a bare ``sin``).
+
+Everything else (attribute access, subscripts, lambdas, comprehensions, comparisons,
+boolean operators, conditional expressions, f-strings, ``:=``, starred arguments, keyword
+arguments, container literals, calls of any other name, ...) is refused with an
+:class:`~symmech.errors.ExpressionError` naming the field, the position (line and
+1-based column, in characters) and the offending text.
+
+Resource limits (keyword arguments of :func:`parse_expression`; defaults below) keep a
+hostile string from exhausting time or memory:
+
+* ``max_length`` (:data:`MAX_LENGTH`): characters in the text;
+* ``max_nodes`` (:data:`MAX_NODES`): operands, operators and calls in the parsed tree;
+* ``max_depth`` (:data:`MAX_DEPTH`): nesting of brackets in the text and of operations in
+  the tree (a chain ``a + b - c + ...`` or ``a*b/c*...`` counts as one level);
+* ``max_exponent`` (:data:`MAX_EXPONENT`): largest absolute value of a numeric exponent,
+  literal or computed (``9**9**9`` is refused because ``9**9`` exceeds it);
+* ``max_digits`` (:data:`MAX_DIGITS`): digits of an integer literal.
+
+Besides, no exact number built while parsing may have a numerator or denominator of more
+than :data:`MAX_NUMBER_DIGITS` digits (``(9**64)**64`` is refused before it is computed),
+and a result that is undefined (``1/0``, ``log(0)``) or complex (``sqrt(-1)``) is refused.
+"""
+
+from __future__ import annotations
+
+import ast
+import difflib
+import math
+import numbers
+import operator
+import re
+import warnings
+from collections.abc import Callable, Mapping
+from types import MappingProxyType
+from typing import NoReturn
+
+import sympy as sp
+
+from symmech.errors import ExpressionError
+
+__all__ = [
+    "ALLOWED_CONSTANTS",
+    "ALLOWED_FUNCTIONS",
+    "MAX_DEPTH",
+    "MAX_DIGITS",
+    "MAX_EXPONENT",
+    "MAX_LENGTH",
+    "MAX_NODES",
+    "MAX_NUMBER_DIGITS",
+    "parse_expression",
+    "to_expression",
+]
+
+#: Default limit on the number of characters of an expression string.
+MAX_LENGTH = 10_000
+#: Default limit on the number of nodes (operands, operations, calls) of the parsed tree.
+MAX_NODES = 2_000
+#: Default limit on the nesting depth (brackets in the text, operations in the tree).
+MAX_DEPTH = 50
+#: Default limit on the absolute value of a numeric exponent.
+MAX_EXPONENT = 64
+#: Default limit on the number of digits of an integer literal.
+MAX_DIGITS = 40
+#: Limit on the digits of the numerator or denominator of any exact number built while
+#: parsing (root extraction and factoring of larger integers get slow).
+MAX_NUMBER_DIGITS = 100
+
+_MAX_NUMBER_BITS = math.ceil(MAX_NUMBER_DIGITS * math.log2(10))
+
+#: The functions a string may call: name -> sympy function.  All are smooth (analytic)
+#: where defined.  ``atan2`` takes two arguments ``(y, x)``, the others one.
+ALLOWED_FUNCTIONS: Mapping[str, Callable[..., sp.Expr]] = MappingProxyType(
+    {
+        "sin": sp.sin,
+        "cos": sp.cos,
+        "tan": sp.tan,
+        "asin": sp.asin,
+        "acos": sp.acos,
+        "atan": sp.atan,
+        "atan2": sp.atan2,
+        "sinh": sp.sinh,
+        "cosh": sp.cosh,
+        "tanh": sp.tanh,
+        "exp": sp.exp,
+        "log": sp.log,
+        "sqrt": sp.sqrt,
+    }
+)
+_ARITY = {"atan2": 2}
+
+#: Named constants usable in strings (a declared symbol of the same name takes precedence).
+ALLOWED_CONSTANTS: Mapping[str, sp.Expr] = MappingProxyType({"pi": sp.pi, "E": sp.E})
+
+# Chains of operators of one group are flattened (one nesting level, iterative building).
+_GROUPS: dict[type, str] = {ast.Add: "+", ast.Sub: "+", ast.Mult: "*", ast.Div: "*"}
+# Chains up to this length are folded left to right with Python's operators, so the result
+# is exactly what the same text typed in Python with sympy objects gives.  Longer chains
+# (pathological input) are built with one sympy.Add / sympy.Mul call: the same value, in
+# linear rather than quadratic time, but products may then be grouped differently
+# (2*(x + 1)*y gives 2*y*(x + 1) rather than y*(2*x + 2)).
+_SEQUENTIAL_FOLD_MAX = 64
+
+_OPERATOR_TOKENS: dict[type, str] = {
+    ast.Add: "+",
+    ast.Sub: "-",
+    ast.Mult: "*",
+    ast.Div: "/",
+    ast.Pow: "**",
+    ast.FloorDiv: "//",
+    ast.Mod: "%",
+    ast.MatMult: "@",
+    ast.BitXor: "^",
+    ast.BitOr: "|",
+    ast.BitAnd: "&",
+    ast.LShift: "<<",
+    ast.RShift: ">>",
+    ast.Not: "not",
+    ast.Invert: "~",
+    ast.UAdd: "+",
+    ast.USub: "-",
+}
+
+_FORBIDDEN: dict[type, str] = {
+    ast.Attribute: "attribute access",
+    ast.Subscript: "subscript",
+    ast.Slice: "slice",
+    ast.Lambda: "lambda",
+    ast.ListComp: "list comprehension",
+    ast.SetComp: "set comprehension",
+    ast.DictComp: "dict comprehension",
+    ast.GeneratorExp: "generator expression",
+    ast.Compare: "comparison",
+    ast.BoolOp: "boolean operator",
+    ast.IfExp: "conditional expression",
+    ast.JoinedStr: "f-string",
+    ast.FormattedValue: "f-string",
+    ast.NamedExpr: "assignment expression (:=)",
+    ast.Starred: "starred expression",
+    ast.Dict: "dict literal",
+    ast.List: "list literal",
+    ast.Set: "set literal",
+    ast.Tuple: "tuple",
+    ast.Await: "await",
+    ast.Yield: "yield",
+    ast.YieldFrom: "yield",
+}
+
+# Values that mark an undefined or complex result.
+_UNDEFINED = (sp.zoo, sp.nan, sp.oo, -sp.oo)
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+_SNIPPET_MAX = 60
+
+
+def _bits(r: sp.Rational) -> int:
+    return max(int(r.p).bit_length(), int(r.q).bit_length())
+
+
+def _top_numbers(value: sp.Expr) -> list[sp.Rational]:
+    """The exact numbers at the top of ``value``: constant terms, coefficients, numeric bases
+    of powers (looking through one Add, then one Mul, then one Pow)."""
+    found = []
+    for term in value.args if value.is_Add else (value,):
+        for factor in term.args if term.is_Mul else (term,):
+            number = factor.base if factor.is_Pow else factor
+            if number.is_Rational:
+                found.append(number)
+    return found
+
+
+def _weight(value: sp.Expr) -> int:
+    """Bound on the bits that the numbers of ``value`` add to a product or power of it.
+
+    Products merge the coefficients and the numeric bases of the factors (bits add up); the
+    terms of a sum are not merged (only their common content can be pulled out).
+    """
+    bits = [_bits(n) for n in _top_numbers(value)]
+    if value.is_Add:
+        return max(bits, default=0)
+    return sum(bits)
+
+
+def _digits_of(n: int) -> int:
+    """Approximate number of decimal digits of ``n`` (no int-to-str conversion)."""
+    return max(1, math.floor(abs(n).bit_length() * math.log10(2)) + 1)
+
+
+def _number_to_sympy(value: object) -> sp.Expr | None:
+    """A finite real Python number as a sympy number; None if ``value`` is not one."""
+    if isinstance(value, bool):
+        return None
+    if isinstance(value, numbers.Integral):
+        return sp.Integer(int(value))
+    if isinstance(value, numbers.Rational):
+        return sp.Rational(int(value.numerator), int(value.denominator))
+    if isinstance(value, numbers.Real):
+        f = float(value)
+        if not math.isfinite(f):
+            return None
+        return sp.Float(f)
+    return None
+
+
+class _Source:
+    """The text being parsed, with the bookkeeping to report positions in it."""
+
+    def __init__(self, original: str, field: str, line: int | None):
+        self.field = field
+        self.line = line
+        stripped = original.lstrip(" \t\f\r\n")
+        prefix = original[: len(original) - len(stripped)]
+        prefix_lines = _LINE_BREAK.split(prefix)
+        # Python refuses an indented first line, so leading blanks are dropped before
+        # parsing; positions are reported in the original text.
+        self.skipped_lines = len(prefix_lines) - 1
+        self.first_col_shift = len(prefix_lines[-1])
+        self.text = stripped
+        self.lines = _LINE_BREAK.split(stripped)
+        self._encoded: list[bytes] | None = None
+
+    def position(self, lineno: int | None, char_col: int | None) -> tuple[int | None, int | None]:
+        """(line, 1-based column) to report for a 1-based line and 0-based column of the text.
+
+        The line is the file line when the caller gave ``line``; otherwise the line within the
+        text, or None for the first line (a one-line text needs no line number).
+        """
+        if lineno is None or char_col is None:
+            return self.line, None
+        rel_line = lineno + self.skipped_lines
+        col = char_col + 1 + (self.first_col_shift if lineno == 1 else 0)
+        if self.line is not None:
+            return self.line + rel_line - 1, col
+        return (rel_line if rel_line > 1 else None), col
+
+    def char_col(self, lineno: int, byte_col: int) -> int:
+        """Convert an AST column (UTF-8 bytes) into characters."""
+        if not 1 <= lineno <= len(self.lines):
+            return byte_col
+        encoded = self.lines[lineno - 1].encode("utf-8")
+        return len(encoded[:byte_col].decode("utf-8", errors="replace"))
+
+    def snippet(self, node: ast.AST) -> str:
+        """The text of ``node`` (whitespace collapsed, shortened)."""
+        lineno = getattr(node, "lineno", None)
+        end_lineno = getattr(node, "end_lineno", None)
+        col = getattr(node, "col_offset", None)
+        end_col = getattr(node, "end_col_offset", None)
+        if None in (lineno, end_lineno, col, end_col) or end_lineno > len(self.lines):
+            return type(node).__name__
+        if self._encoded is None:
+            self._encoded = [line.encode("utf-8") for line in self.lines]
+        enc = self._encoded
+        if lineno == end_lineno:
+            parts = [enc[lineno - 1][col:end_col]]
+        else:
+            parts = [enc[lineno - 1][col:], *enc[lineno : end_lineno - 1]]
+            parts.append(enc[end_lineno - 1][:end_col])
+        segment = " ".join(p.decode("utf-8", errors="replace") for p in parts)
+        return _shorten(" ".join(segment.split()))
+
+    def error(
+        self,
+        message: str,
+        *,
+        lineno: int | None = None,
+        char_col: int | None = None,
+        token: str | None = None,
+    ) -> ExpressionError:
+        at_line, at_col = self.position(lineno, char_col)
+        parts = ([] if at_line is None else [f"line {at_line}"]) + (
+            [] if at_col is None else [f"col {at_col}"]
+        )
+        prefix = f"{self.field} ({', '.join(parts)})" if parts else self.field
+        exc = ExpressionError(f"{prefix}: {message}")
+        exc.field = self.field  # type: ignore[attr-defined]
+        exc.line = at_line  # type: ignore[attr-defined]
+        exc.column = at_col  # type: ignore[attr-defined]
+        exc.token = token  # type: ignore[attr-defined]
+        return exc
+
+    def fail(self, node: ast.AST, message: str, token: str | None = None) -> NoReturn:
+        lineno = getattr(node, "lineno", None)
+        col = getattr(node, "col_offset", None)
+        char_col = None if lineno is None or col is None else self.char_col(lineno, col)
+        raise self.error(message, lineno=lineno, char_col=char_col, token=token)
+
+
+def _shorten(text: str) -> str:
+    return text if len(text) <= _SNIPPET_MAX else text[: _SNIPPET_MAX - 3] + "..."
+
+
+def _did_you_mean(name: str, candidates: list[str]) -> str:
+    close = difflib.get_close_matches(name, candidates, n=3, cutoff=0.6)
+    return f"; did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+
+
+class _Parser:
+    def __init__(
+        self,
+        src: _Source,
+        symbols: Mapping[str, sp.Basic] | None,
+        *,
+        max_nodes: int,
+        max_depth: int,
+        max_exponent: int,
+        max_digits: int,
+    ):
+        self.src = src
+        self.symbols = symbols
+        self.max_nodes = max_nodes
+        self.max_depth = max_depth
+        self.max_exponent = max_exponent
+        self.max_digits = max_digits
+        self.max_literal = 10**max_digits
+
+    # -- pass 1: whitelist, size and depth, iteratively ------------------------------------
+
+    def validate(self, root: ast.expr) -> None:
+        stack: list[tuple[ast.expr, int]] = [(root, 1)]
+        count = 0
+        while stack:
+            node, depth = stack.pop()
+            count += 1
+            if count > self.max_nodes:
+                self.src.fail(
+                    node,
+                    f"expression too large: more than {self.max_nodes} operands and operations"
+                    f" (limit max_nodes={self.max_nodes})",
+                )
+            if depth > self.max_depth and not isinstance(node, ast.Name | ast.Constant):
+                self.src.fail(
+                    node,
+                    f"expression nested more than {self.max_depth} levels deep at"
+                    f" '{self.src.snippet(node)}' (limit max_depth={self.max_depth})",
+                )
+            children = self._check_node(node)
+            for child in reversed(children):
+                same_chain = (
+                    isinstance(node, ast.BinOp)
+                    and child is node.left
+                    and isinstance(child, ast.BinOp)
+                    and type(node.op) in _GROUPS
+                    and _GROUPS.get(type(child.op)) == _GROUPS[type(node.op)]
+                )
+                stack.append((child, depth if same_chain else depth + 1))
+
+    def _check_node(self, node: ast.expr) -> list[ast.expr]:
+        src = self.src
+        if isinstance(node, ast.Constant):
+            self._check_constant(node)
+            return []
+        if isinstance(node, ast.Name):
+            return []
+        if isinstance(node, ast.BinOp):
+            if type(node.op) not in _GROUPS and not isinstance(node.op, ast.Pow):
+                token = _OPERATOR_TOKENS.get(type(node.op), type(node.op).__name__)
+                hint = "; use '**' for powers" if isinstance(node.op, ast.BitXor) else ""
+                src.fail(
+                    node,
+                    f"operator '{token}' in '{src.snippet(node)}' is not allowed{hint}",
+                    token,
+                )
+            return [node.left, node.right]
+        if isinstance(node, ast.UnaryOp):
+            if not isinstance(node.op, ast.USub | ast.UAdd):
+                token = _OPERATOR_TOKENS.get(type(node.op), type(node.op).__name__)
+                src.fail(node, f"operator '{token}' in '{src.snippet(node)}' is not allowed", token)
+            return [node.operand]
+        if isinstance(node, ast.Call):
+            return self._check_call(node)
+        desc = _FORBIDDEN.get(type(node), f"{type(node).__name__} expression")
+        snippet = src.snippet(node)
+        src.fail(node, f"{desc} '{snippet}' is not allowed", snippet)
+
+    def _check_constant(self, node: ast.Constant) -> None:
+        src, value = self.src, node.value
+
+        def refuse(what: str) -> NoReturn:
+            snippet = src.snippet(node)
+            src.fail(node, what.format(snippet=snippet), snippet)
+
+        if isinstance(value, bool) or value is None or value is Ellipsis:
+            refuse("'{snippet}' is not allowed (only numbers and names)")
+        if isinstance(value, str):
+            refuse("string literal '{snippet}' is not allowed")
+        if isinstance(value, bytes):
+            refuse("bytes literal '{snippet}' is not allowed")
+        if isinstance(value, complex):
+            refuse("complex number '{snippet}' is not allowed")
+        if isinstance(value, int):
+            if abs(value) >= self.max_literal:
+                refuse(
+                    f"integer literal '{{snippet}}' has about {_digits_of(value)} digits"
+                    f" (limit max_digits={self.max_digits})"
+                )
+            return
+        if isinstance(value, float):
+            if not math.isfinite(value):
+                refuse("float literal '{snippet}' is out of range")
+            return
+        refuse("literal '{snippet}' is not allowed")  # pragma: no cover
+
+    def _check_call(self, node: ast.Call) -> list[ast.expr]:
+        src = self.src
+        func = node.func
+        if isinstance(func, ast.Name) and func.id in ALLOWED_FUNCTIONS and not node.keywords:
+            arity = _ARITY.get(func.id, 1)
+            if len(node.args) == arity and not any(isinstance(a, ast.Starred) for a in node.args):
+                return list(node.args)
+        snippet = src.snippet(node)
+        if not isinstance(func, ast.Name):
+            callee = src.snippet(func)
+            src.fail(node, f"call of '{callee}' in '{snippet}' is not allowed", callee)
+        name = func.id
+        if name not in ALLOWED_FUNCTIONS:
+            allowed = ", ".join(sorted(ALLOWED_FUNCTIONS))
+            if self.symbols is not None and name in self.symbols:
+                what = f"'{name}' is a symbol, not a function: '{snippet}' is not allowed"
+            else:
+                what = f"function '{name}' is not allowed in '{snippet}'"
+            src.fail(
+                func,
+                f"{what} (allowed functions: {allowed})"
+                f"{_did_you_mean(name, list(ALLOWED_FUNCTIONS))}",
+                name,
+            )
+        if node.keywords:
+            kw = node.keywords[0]
+            token = "**" if kw.arg is None else f"{kw.arg}="
+            src.fail(kw, f"keyword argument '{token}' in '{snippet}' is not allowed", token)
+        for arg in node.args:
+            if isinstance(arg, ast.Starred):
+                token = src.snippet(arg)
+                src.fail(arg, f"starred argument '{token}' in '{snippet}' is not allowed", token)
+        arity = _ARITY.get(name, 1)
+        if len(node.args) != arity:
+            plural = "s" if arity != 1 else ""
+            src.fail(
+                node,
+                f"'{name}' takes {arity} argument{plural}, got {len(node.args)} in '{snippet}'",
+                name,
+            )
+        return list(node.args)
+
+    # -- pass 2: build the sympy expression ----------------------------------------------
+
+    def build(self, node: ast.expr) -> sp.Expr:
+        if isinstance(node, ast.Constant):
+            value = _number_to_sympy(node.value)
+            assert value is not None  # checked by validate
+            return value
+        if isinstance(node, ast.Name):
+            return self._name(node)
+        if isinstance(node, ast.UnaryOp):
+            operand = self.build(node.operand)
+            return -operand if isinstance(node.op, ast.USub) else operand
+        if isinstance(node, ast.Call):
+            return self._call(node)
+        assert isinstance(node, ast.BinOp)  # checked by validate
+        if isinstance(node.op, ast.Pow):
+            return self._power(node)
+        return self._chain(node)
+
+    def _name(self, node: ast.Name) -> sp.Expr:
+        src, name = self.src, node.id
+        if self.symbols is not None:
+            if name in self.symbols:
+                return self._symbol_value(node, name, self.symbols[name])
+            if not name.isascii():  # Python NFKC-normalises identifiers; try the text as typed
+                typed = src.snippet(node)
+                if typed in self.symbols:
+                    return self._symbol_value(node, typed, self.symbols[typed])
+        if name in ALLOWED_CONSTANTS:
+            return ALLOWED_CONSTANTS[name]
+        if name in ALLOWED_FUNCTIONS:
+            src.fail(
+                node,
+                f"function '{name}' must be called with its argument, e.g. '{name}(x)'",
+                name,
+            )
+        if self.symbols is None:
+            if name.startswith("__"):
+                src.fail(node, f"name '{name}' is not allowed", name)
+            return sp.Symbol(name, real=True)
+        declared = [k for k in self.symbols if isinstance(k, str)]
+        candidates = declared + list(ALLOWED_CONSTANTS)
+        if not declared:
+            known = "no symbols are declared"
+        elif len(declared) <= 12:
+            known = "declared: " + ", ".join(sorted(declared))
+        else:
+            known = f"{len(declared)} symbols declared"
+        src.fail(node, f"unknown name '{name}' ({known}){_did_you_mean(name, candidates)}", name)
+
+    def _symbol_value(self, node: ast.Name, key: str, value: object) -> sp.Expr:
+        if isinstance(value, sp.Expr) and not isinstance(value, sp.MatrixBase | sp.MatrixExpr):
+            return value
+        number = _number_to_sympy(value)
+        if number is not None:
+            return number
+        self.src.fail(
+            node,
+            f"the symbol table maps '{key}' to a {type(value).__name__},"
+            " not a scalar sympy expression",
+            key,
+        )
+
+    def _chain(self, node: ast.BinOp) -> sp.Expr:
+        """A left-associated chain of + - (or * /), built iteratively."""
+        group = _GROUPS[type(node.op)]
+        rights: list[tuple[ast.operator, ast.expr]] = []
+        left: ast.expr = node
+        while (
+            isinstance(left, ast.BinOp)
+            and type(left.op) in _GROUPS
+            and _GROUPS[type(left.op)] == group
+        ):
+            rights.append((left.op, left.right))
+            left = left.left
+        rights.reverse()
+        first = self.build(left)
+        operands: list[tuple[ast.operator, ast.expr, sp.Expr]] = []
+        for op, right in rights:
+            value = self.build(right)
+            if isinstance(op, ast.Div) and value.is_Number and value.is_zero:
+                self.src.fail(
+                    right,
+                    f"division by zero: '{self.src.snippet(right)}' is 0",
+                    self.src.snippet(right),
+                )
+            operands.append((op, right, value))
+        if len(operands) <= _SEQUENTIAL_FOLD_MAX:
+            # left to right, checking every partial result: sympy merges the numbers of a
+            # product (sqrt(a)*sqrt(b) is sqrt(a*b)), and roots of big numbers are slow
+            result = first
+            for op, right, value in operands:
+                result = _PY_OPERATORS[type(op)](result, value)
+                self._check_numbers(node, result)
+            return result
+        if group == "+":
+            result = sp.Add(first, *(v if isinstance(op, ast.Add) else -v for op, _, v in operands))
+        else:
+            # One Mul call merges all the numbers at once: bound their size beforehand.
+            estimate = _weight(first) + sum(_weight(v) for _, _, v in operands)
+            if estimate > _MAX_NUMBER_BITS:
+                self._too_large(node, estimate)
+            result = sp.Mul(
+                first,
+                *(v if isinstance(op, ast.Mult) else sp.Pow(v, -1) for op, _, v in operands),
+            )
+        self._check_numbers(node, result)
+        return result
+
+    def _power(self, node: ast.BinOp) -> sp.Expr:
+        src = self.src
+        base = self.build(node.left)
+        exponent = self.build(node.right)
+        if exponent.is_Number:
+            if abs(exponent) > self.max_exponent:
+                token = src.snippet(node.right)
+                src.fail(
+                    node,
+                    f"exponent {exponent} in '{src.snippet(node)}' is too large"
+                    f" (limit max_exponent={self.max_exponent})",
+                    token,
+                )
+            if exponent.is_Rational and abs(exponent.p) > 1:
+                # the numbers of the base get raised to the power: bound the result first
+                estimate = _weight(base) * abs(int(exponent.p))
+                if estimate > _MAX_NUMBER_BITS:
+                    self._too_large(node, estimate)
+        result = base**exponent
+        self._check_value(node, result)
+        return result
+
+    def _call(self, node: ast.Call) -> sp.Expr:
+        assert isinstance(node.func, ast.Name)
+        args = [self.build(a) for a in node.args]
+        result = ALLOWED_FUNCTIONS[node.func.id](*args)
+        self._check_value(node, result)
+        return result
+
+    def _check_value(self, node: ast.AST, value: sp.Expr) -> None:
+        """Refuse undefined or complex values, and too large numbers, made by ``node``."""
+        src = self.src
+        if value.has(*_UNDEFINED):
+            src.fail(
+                node,
+                f"'{src.snippet(node)}' is undefined (division by zero or infinite value)",
+                src.snippet(node),
+            )
+        if value.has(sp.I):
+            src.fail(
+                node,
+                f"'{src.snippet(node)}' is not real (it involves the imaginary unit I)",
+                src.snippet(node),
+            )
+        self._check_numbers(node, value)
+
+    def _check_numbers(self, node: ast.AST, value: sp.Expr) -> None:
+        """Refuse an exact number too large, among the numbers ``node`` can have made.
+
+        Only the numbers near the top of ``value`` are inspected (:func:`_top_numbers`):
+        its children were checked when they were built, and sympy's automatic evaluation
+        leaves new numbers as coefficients, constant terms or numeric bases of powers.  The
+        complete result is checked once more at the end.
+        """
+        for number in _top_numbers(value):
+            if _bits(number) > _MAX_NUMBER_BITS:
+                self._too_large(node, _bits(number))
+
+    def _too_large(self, node: ast.AST, bits: int) -> NoReturn:
+        snippet = self.src.snippet(node)
+        digits = math.ceil(bits * math.log10(2))
+        self.src.fail(
+            node,
+            f"'{snippet}' builds a number of about {digits} digits (limit {MAX_NUMBER_DIGITS})",
+            snippet,
+        )
+
+    def finish(self, root: ast.expr, value: sp.Expr) -> sp.Expr:
+        self._check_value(root, value)
+        for number in value.atoms(sp.Rational):
+            if _bits(number) > _MAX_NUMBER_BITS:
+                self._too_large(root, _bits(number))
+        return value
+
+
+_PY_OPERATORS: dict[type, Callable[[sp.Expr, sp.Expr], sp.Expr]] = {
+    ast.Add: operator.add,
+    ast.Sub: operator.sub,
+    ast.Mult: operator.mul,
+    ast.Div: operator.truediv,
+}
+
+
+def _check_brackets(src: _Source, max_depth: int) -> None:
+    """Refuse brackets nested deeper than ``max_depth`` before Python's parser sees them."""
+    depth = 0
+    for lineno, line in enumerate(src.lines, start=1):
+        for col, ch in enumerate(line):
+            if ch in "([{":
+                depth += 1
+                if depth > max_depth:
+                    raise src.error(
+                        f"brackets nested more than {max_depth} levels deep at '{ch}'"
+                        f" (limit max_depth={max_depth})",
+                        lineno=lineno,
+                        char_col=col,
+                        token=ch,
+                    )
+            elif ch in ")]}":
+                depth = max(0, depth - 1)
+
+
+def _syntax_error(src: _Source, exc: SyntaxError) -> ExpressionError:
+    lineno = exc.lineno if exc.lineno and exc.lineno >= 1 else None
+    char_col = exc.offset - 1 if lineno is not None and exc.offset and exc.offset >= 1 else None
+    near = ""
+    token = None
+    if lineno is not None and char_col is not None and lineno <= len(src.lines):
+        rest = src.lines[lineno - 1][char_col:].strip()
+        token = _shorten(rest[:20]) if rest else None
+        if token:
+            near = f" at '{token}'"
+        else:
+            near = (
+                " at the end of the line" if lineno < len(src.lines) else " at the end of the text"
+            )
+    message = (exc.msg or "invalid syntax").rstrip(".")
+    return src.error(
+        f"syntax error: {message}{near}", lineno=lineno, char_col=char_col, token=token
+    )
+
+
+def parse_expression(
+    text: str,
+    symbols: Mapping[str, sp.Basic] | None,
+    *,
+    field: str = "expression",
+    line: int | None = None,
+    max_length: int = MAX_LENGTH,
+    max_nodes: int = MAX_NODES,
+    max_depth: int = MAX_DEPTH,
+    max_exponent: int = MAX_EXPONENT,
+    max_digits: int = MAX_DIGITS,
+) -> sp.Expr:
+    """Parse the expression string ``text`` into a sympy expression, safely.
+
+    Nothing in ``text`` is ever executed: it is parsed into a Python AST that is checked
+    against a whitelist (see the module documentation) and converted node by node.
+
+    Parameters
+    ----------
+    text
+        The expression, in Python syntax: ``"-g*l*cos(theta)"``.
+    symbols
+        The names ``text`` may use, mapped to sympy expressions (usually ``Symbol`` s).
+        ``None`` accepts every plain identifier as a real ``Symbol`` of that name (used to
+        check a string before the scene's symbols are known).
+    field
+        What the text is, for error messages: ``"walls[0].psi"``.
+    line
+        Line of a file where the text starts, for error messages.
+    max_length, max_nodes, max_depth, max_exponent, max_digits
+        Resource limits, see the module documentation.
+
+    Returns
+    -------
+    The sympy expression, built with sympy's usual automatic evaluation: the same as the
+    text typed in Python with the symbols as sympy objects (``1/2*m`` is ``m/2``).
+
+    Raises
+    ------
+    ExpressionError
+        With a message naming ``field``, the position and the offending text.
+
+    >>> import sympy as sp
+    >>> x, v = sp.symbols("x v", real=True)
+    >>> parse_expression("v**2/2 - 9*cos(x)", {"x": x, "v": v})
+    v**2/2 - 9*cos(x)
+    >>> parse_expression("x.__class__", {"x": x}, field="walls[0].psi", line=12)
+    Traceback (most recent call last):
+    ...
+    symmech.errors.ExpressionError: walls[0].psi (line 12, col 1): attribute access 'x.__class__' is not allowed
+    >>> parse_expression("sin(x) + y1", {"x": x, "y": v}, field="potential")
+    Traceback (most recent call last):
+    ...
+    symmech.errors.ExpressionError: potential (col 10): unknown name 'y1' (declared: x, y); did you mean 'y'?
+    """  # noqa: E501
+    if not isinstance(field, str):
+        field = str(field)
+    if not isinstance(text, str):
+        src = _Source("", field, line)
+        raise src.error(f"expected an expression string, got a {type(text).__name__}")
+    if len(text) > max_length:
+        raise _Source("", field, line).error(
+            f"expression is {len(text)} characters long (limit max_length={max_length})"
+        )
+    src = _Source(text, field, line)
+    for lineno, line_text in enumerate(src.lines, start=1):
+        bad = next((i for i, ch in enumerate(line_text) if ch == "\x00"), None)
+        if bad is not None:
+            raise src.error("null character in the text", lineno=lineno, char_col=bad)
+    if not src.text.strip():
+        raise src.error("empty expression")
+    _check_brackets(src, max_depth)
+    try:
+        with warnings.catch_warnings():
+            # "1if x else y" and the like: refused (a SyntaxWarning raised as an error
+            # becomes a SyntaxError), and nothing leaks to the caller's warnings.
+            warnings.simplefilter("error", SyntaxWarning)
+            warnings.simplefilter("ignore", DeprecationWarning)
+            tree = ast.parse(src.text, mode="eval")
+    except SyntaxError as exc:
+        raise _syntax_error(src, exc) from None
+    except (RecursionError, MemoryError):
+        raise src.error(
+            "expression too complex for Python's parser (too long a chain of operators or"
+            f" too deeply nested; limits max_nodes={max_nodes}, max_depth={max_depth})"
+        ) from None
+    except ValueError as exc:
+        raise src.error(f"cannot parse: {exc}") from None
+    parser = _Parser(
+        src,
+        symbols,
+        max_nodes=max_nodes,
+        max_depth=max_depth,
+        max_exponent=max_exponent,
+        max_digits=max_digits,
+    )
+    parser.validate(tree.body)
+    try:
+        value = parser.build(tree.body)
+    except RecursionError:
+        raise src.error(f"expression too deeply nested (limit max_depth={max_depth})") from None
+    return parser.finish(tree.body, value)
+
+
+def to_expression(
+    value: object,
+    symbols: Mapping[str, sp.Basic] | None,
+    *,
+    field: str = "expression",
+    line: int | None = None,
+) -> sp.Expr:
+    """Return ``value`` as a sympy expression.
+
+    * a sympy expression is returned unchanged (matrices and non-expressions such as
+      relations or booleans are refused);
+    * a Python (or numpy) real number becomes a sympy ``Integer``, ``Rational`` (for a
+      ``fractions.Fraction``) or ``Float``; ``bool``, complex, NaN and infinities are
+      refused;
+    * a string is parsed by :func:`parse_expression` with ``symbols``, ``field`` and
+      ``line`` (and the default limits).
+
+    Anything else raises :class:`~symmech.errors.ExpressionError` naming ``field`` and
+    the type.
+
+    >>> import sympy as sp
+    >>> th = sp.Symbol("theta", real=True)
+    >>> to_expression("1 - cos(theta)", {"theta": th}, field="potential")
+    1 - cos(theta)
+    >>> to_expression(2, None), to_expression(0.5, None), to_expression(th, None)
+    (2, 0.500000000000000, theta)
+    >>> to_expression([1], None, field="walls[1].psi")
+    Traceback (most recent call last):
+    ...
+    symmech.errors.ExpressionError: walls[1].psi: expected a sympy expression, a number or a string, got a list
+    """  # noqa: E501
+    if isinstance(value, str):
+        return parse_expression(value, symbols, field=field, line=line)
+    src = _Source("", str(field), line)
+    if isinstance(value, sp.MatrixBase | sp.MatrixExpr):
+        raise src.error(f"expected a scalar expression, got a matrix {value!r}")
+    if isinstance(value, sp.Basic):
+        if not isinstance(value, sp.Expr):
+            raise src.error(
+                f"expected a scalar expression, got a sympy {type(value).__name__}: {value}"
+            )
+        return value
+    number = _number_to_sympy(value)
+    if number is not None:
+        return number
+    if isinstance(value, bool):
+        raise src.error(f"expected a number or an expression, got the boolean {value}")
+    if isinstance(value, numbers.Real):
+        raise src.error(f"expected a finite number, got {value!r}")
+    if isinstance(value, numbers.Complex):
+        raise src.error(f"expected a real number, got the complex number {value!r}")
+    raise src.error(
+        f"expected a sympy expression, a number or a string, got a {type(value).__name__}"
+    )

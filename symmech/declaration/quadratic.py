@@ -1,0 +1,179 @@
+"""Extract the metric of a kinetic energy given as a quadratic form in the velocities.
+
+For ``T = 1/2 v^T g(q) v`` the metric is the Hessian ``g_ij = d^2 T / dv^i dv^j``.  Kinetic
+energies of multibody systems are sums of squares of linear forms, ``T = sum_b c_b L_b^2``
+with ``L_b = a_b . v``; expanding those squares costs O(n^3) terms per body and dominates
+the derivation of large systems.  :func:`metric_from_kinetic_energy` instead walks the
+expression tree and uses ``Hess(c L^2) = 2 c a a^T`` and ``Hess(c L1 L2) = c (a1 a2^T +
+a2 a1^T)`` directly, falling back to expansion only for shapes it does not recognise.
+Terms of each entry are then grouped by their coordinate-dependent factor, so an entry
+reads ``(sum of parameter products) * (function of q)``.
+
+The walk also decides whether T is a quadratic form at all: every velocity-dependent part
+must be a product of exactly two linear forms (or a square), and no part may be free of
+the velocities.
+"""
+
+from __future__ import annotations
+
+from collections import Counter, defaultdict
+from collections.abc import Sequence
+
+import sympy as sp
+
+__all__ = ["NotQuadraticError", "group_by_factor", "linear_coefficients", "metric_from_kinetic_energy"]
+
+
+class NotQuadraticError(ValueError):
+    """The expression is not a homogeneous quadratic (or linear) form in the velocities."""
+
+    def __init__(self, term: sp.Expr, reason: str):
+        self.term = term
+        super().__init__(reason)
+
+
+def _has(expr: sp.Expr, vset: frozenset) -> bool:
+    return not vset.isdisjoint(expr.free_symbols)
+
+
+# A term is kept as (numeric coefficient, tuple of factors) and only turned into a sympy
+# expression after grouping: building one sympy Mul per term is what makes the naive
+# expansion slow for large systems.
+_Term = tuple[sp.Expr, tuple[sp.Expr, ...]]
+
+
+def _split(expr: sp.Expr) -> _Term:
+    if expr.is_Mul:
+        num = [f for f in expr.args if f.is_Number]
+        return sp.Mul(*num), tuple(f for f in expr.args if not f.is_Number)
+    if expr.is_Number:
+        return expr, ()
+    return sp.S.One, (expr,)
+
+
+def linear_coefficients(expr: sp.Expr, index: dict[sp.Symbol, int]) -> dict[int, list[_Term]]:
+    """Coefficient terms of a homogeneous linear form ``sum_j a_j v^j``: ``{j: [terms of a_j]}``.
+
+    Each term is ``(number, factors)``; raises :class:`NotQuadraticError` when ``expr`` is
+    not linear and homogeneous in the velocities.
+    """
+    vset = frozenset(index)
+    if expr in index:
+        return {index[expr]: [(sp.S.One, ())]}
+    if expr.is_Add:
+        out: dict[int, list[_Term]] = defaultdict(list)
+        for arg in expr.args:
+            for j, terms in linear_coefficients(arg, index).items():
+                out[j].extend(terms)
+        return out
+    if expr.is_Mul:
+        dep = [f for f in expr.args if _has(f, vset)]
+        if len(dep) != 1:
+            raise NotQuadraticError(expr, "not linear in the velocities")
+        num, factors = _split(sp.Mul(*[f for f in expr.args if not _has(f, vset)]))
+        inner = linear_coefficients(dep[0], index)
+        return {j: [(num * n2, factors + f2) for n2, f2 in terms] for j, terms in inner.items()}
+    if _has(expr, vset):
+        raise NotQuadraticError(expr, "not linear in the velocities")
+    raise NotQuadraticError(expr, "has a part that does not depend on the velocities")
+
+
+def _outer(
+    out: dict[tuple[int, int], list[_Term]],
+    coef: _Term,
+    a: dict[int, list[_Term]],
+    b: dict[int, list[_Term]],
+) -> None:
+    """out += coef * (a b^T + b a^T), upper triangle only (i <= j)."""
+    cn, cf = coef
+    for i, ai in a.items():
+        for j, bj in b.items():
+            if i > j and a is b:
+                continue  # symmetric: (j, i) is added with the doubled factor below
+            key = (i, j) if i <= j else (j, i)
+            mult = 2 if (i == j or a is b) else 1
+            for sn, sf in ai:
+                for un, uf in bj:
+                    out[key].append((mult * cn * sn * un, cf + sf + uf))
+
+
+def _hessian(expr: sp.Expr, index: dict[sp.Symbol, int], out: dict, coef: _Term) -> None:
+    vset = frozenset(index)
+    if expr.is_Add:
+        for arg in expr.args:
+            _hessian(arg, index, out, coef)
+        return
+    if expr.is_Pow:
+        if expr.exp == 2:
+            a = linear_coefficients(expr.base, index)
+            _outer(out, coef, a, a)
+            return
+        raise NotQuadraticError(expr, "not a quadratic form in the velocities")
+    if expr.is_Mul:
+        dep = [f for f in expr.args if _has(f, vset)]
+        num, factors = _split(sp.Mul(*[f for f in expr.args if not _has(f, vset)]))
+        c = (coef[0] * num, coef[1] + factors)
+        if len(dep) == 1:
+            _hessian(dep[0], index, out, c)
+            return
+        if len(dep) == 2:
+            a = linear_coefficients(dep[0], index)
+            b = linear_coefficients(dep[1], index)
+            _outer(out, c, a, b)
+            return
+        raise NotQuadraticError(expr, "not a quadratic form in the velocities")
+    if _has(expr, vset):
+        raise NotQuadraticError(expr, "not a quadratic form in the velocities")
+    raise NotQuadraticError(expr, "has a part that does not depend on the velocities")
+
+
+def group_by_factor(terms: Sequence[_Term], q: frozenset) -> sp.Expr:
+    """Sum ``terms``, grouping them by their coordinate-dependent factors.
+
+    ``m1 l1 l2 cos(q1) cos(q2) + m2 l1 l2 cos(q1) cos(q2)`` becomes
+    ``l1 l2 (m1 + m2) cos(q1) cos(q2)``: fewer operations, same value.
+    """
+    groups: dict[tuple, list[tuple[sp.Expr, list[sp.Expr]]]] = defaultdict(list)
+    for num, factors in terms:
+        dep = tuple(sorted((f for f in factors if not q.isdisjoint(f.free_symbols)), key=hash))
+        groups[dep].append((num, [f for f in factors if q.isdisjoint(f.free_symbols)]))
+    return sp.Add(*[_common_factor_sum(items) * sp.Mul(*dep) for dep, items in groups.items()])
+
+
+def _common_factor_sum(items: list[tuple[sp.Expr, list[sp.Expr]]]) -> sp.Expr:
+    """Sum of ``num * prod(factors)`` with the factors common to every item pulled out.
+
+    ``m1*l1*l2 + m2*l1*l2`` -> ``l1*l2*(m1 + m2)`` (a cheap, multiset form of factor_terms).
+    """
+    if len(items) == 1:
+        num, factors = items[0]
+        return num * sp.Mul(*factors)
+    common = Counter(items[0][1])
+    for _, factors in items[1:]:
+        common &= Counter(factors)
+        if not common:
+            break
+    rest = []
+    for num, factors in items:
+        left = Counter(factors)
+        left.subtract(common)
+        rest.append(num * sp.Mul(*left.elements()))
+    return sp.Mul(*common.elements()) * sp.Add(*rest)
+
+
+def metric_from_kinetic_energy(
+    T: sp.Expr, v: Sequence[sp.Symbol], q: Sequence[sp.Symbol]
+) -> sp.Matrix:
+    """g with ``T = 1/2 v^T g v`` (the Hessian of T in v); raises :class:`NotQuadraticError`.
+
+    Slides 000, "Riemannian manifold": ``KineticEnergy = 1/2 <b q_dot | q_dot>``.
+    """
+    index = {s: i for i, s in enumerate(v)}
+    out: dict[tuple[int, int], list[_Term]] = defaultdict(list)
+    _hessian(sp.sympify(T), index, out, (sp.S.One, ()))
+    n = len(v)
+    qset = frozenset(q)
+    G = sp.zeros(n, n)
+    for (i, j), terms in out.items():
+        G[i, j] = G[j, i] = group_by_factor(terms, qset)
+    return G

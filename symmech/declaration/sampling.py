@@ -1,0 +1,53 @@
+"""Sample numeric values for symbols, respecting their sympy assumptions.
+
+Used where a symbolic check would be too expensive or undecidable: positive definiteness
+of a metric, independence of constraints.  A check "at sampled points" evaluates at a few
+random points drawn here; it is a generic statement (it holds off a measure-zero set).
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Iterable
+
+import sympy as sp
+
+__all__ = ["sample_point", "sample_points"]
+
+
+def _sample(sym: sp.Symbol, rng: random.Random) -> sp.Rational:
+    # Rationals keep the downstream evaluation exact when sympy can do it.
+    def rat(lo: float, hi: float) -> sp.Rational:
+        return sp.Rational(rng.randint(int(lo * 1000), int(hi * 1000)), 1000)
+
+    if sym.is_integer:
+        if sym.is_positive:
+            return sp.Integer(rng.randint(1, 5))
+        if sym.is_nonnegative:
+            return sp.Integer(rng.randint(0, 5))
+        if sym.is_negative:
+            return sp.Integer(-rng.randint(1, 5))
+        return sp.Integer(rng.randint(-5, 5))
+    if sym.is_positive:
+        return rat(0.3, 2.0)
+    if sym.is_nonnegative:
+        return rat(0.0, 2.0)
+    if sym.is_negative:
+        return -rat(0.3, 2.0)
+    if sym.is_nonpositive:
+        return -rat(0.0, 2.0)
+    return rat(-1.5, 1.5)
+
+
+def sample_point(symbols: Iterable[sp.Symbol], rng: random.Random) -> dict[sp.Symbol, sp.Rational]:
+    """One random rational value per symbol, honouring positive/negative/integer assumptions."""
+    return {s: _sample(s, rng) for s in symbols}
+
+
+def sample_points(
+    symbols: Iterable[sp.Symbol], count: int = 4, seed: int = 20010101
+) -> list[dict[sp.Symbol, sp.Rational]]:
+    """``count`` reproducible random points (fixed seed, so a failing check is repeatable)."""
+    syms = sorted(set(symbols), key=lambda s: s.name)
+    rng = random.Random(seed)
+    return [sample_point(syms, rng) for _ in range(count)]

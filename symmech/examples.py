@@ -1,0 +1,172 @@
+"""Built-in scenes from the texts: a model zoo shared by the CLI, tests, docs and benchmarks.
+
+Each function returns a fresh :class:`~symmech.Scene`; :data:`EXAMPLES` maps the names the
+command line uses to those functions and a one-line description.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import sympy as sp
+
+from symmech.declaration import shapes
+from symmech.declaration.symbols import coordinates, t, velocities
+from symmech.declaration.wall import Wall
+from symmech.scene import Scene
+
+__all__ = [
+    "EXAMPLES",
+    "bouncing_ellipse",
+    "car",
+    "carnot_3_7",
+    "carnot_3_13",
+    "carnot_4_4",
+    "example",
+    "pendulum_on_cart",
+    "spinning_disk",
+]
+
+
+def bouncing_ellipse(restitution: object = 1) -> Scene:
+    """Text 001, section 3.1: a planar ellipse (mass m, inertia I, semi-axes a, b) hits the
+    wall x = 0 from the side x < 0.  ``psi = -x - sqrt(a^2 cos^2 theta + b^2 sin^2 theta)``
+    (support function; exact for every orientation)."""
+    x, y, th = coordinates("x y theta")
+    m, I, a, b = sp.symbols("m I a b", positive=True)
+    psi = shapes.ellipse_gap((x, y), th, (a, b), shapes.Plane((0, 0), (-1, 0)))
+    return Scene(
+        (x, y, th),
+        metric=sp.diag(m, m, I),
+        walls=[Wall(psi, restitution=restitution, name="wall")],
+        name="bouncing_ellipse",
+    )
+
+
+def spinning_disk(law: str = "energy") -> Scene:
+    """Text 001, section 3.2: a spinning disk (mass m, inertia I, radius R) hits the rough
+    wall x = 0 from the side x > 0; at impact it rolls on the wall, ``y_dot + R theta_dot = 0``."""
+    x, y, th = coordinates("x y theta")
+    xd, yd, thd = velocities((x, y, th))
+    m, I, R = sp.symbols("m I R", positive=True)
+    psi = shapes.disk_gap((x, y), R, shapes.Plane((0, 0), (1, 0)))
+    wall = Wall(psi, restitution=1, impulsive_constraints=[yd + R * thd], name="wall", law=law)
+    return Scene((x, y, th), metric=sp.diag(m, m, I), walls=[wall], name="spinning_disk")
+
+
+def carnot_3_7() -> Scene:
+    """Carnot paper, example 3.7: a disc (radius R, mass m, inertia m k^2) moving in a
+    vertical plane hits the rough wall y = R; at impact ``x_dot - R theta_dot = 0``."""
+    x, y, th = coordinates("x y theta")
+    xd, yd, thd = velocities((x, y, th))
+    m, k, R = sp.symbols("m k R", positive=True)
+    alpha = sp.Symbol("alpha", nonnegative=True)
+    wall = Wall(y - R, restitution=alpha, impulsive_constraints=[xd - R * thd], name="rough_wall")
+    return Scene((x, y, th), metric=sp.diag(m, m, m * k**2), walls=[wall], name="carnot_3_7")
+
+
+def _rolling_sphere(psi: sp.Expr, name: str) -> Scene:
+    x, y, z, phi, theta, psi_ang = coordinates("x y z phi theta psi")
+    vx, vy, vz, wx, wy, wz = sp.symbols("v_x v_y v_z omega_x omega_y omega_z", real=True)
+    k, r = sp.symbols("k r", positive=True)
+    alpha = sp.Symbol("alpha", nonnegative=True)
+    # (omega_x, omega_y, omega_z) = B (phi_dot, theta_dot, psi_dot), Carnot paper ex. 3.13
+    B = sp.Matrix(
+        [
+            [sp.sin(theta) * sp.sin(psi_ang), sp.cos(psi_ang), 0],
+            [-sp.sin(theta) * sp.cos(psi_ang), sp.sin(psi_ang), 0],
+            [sp.cos(theta), 0, 1],
+        ]
+    )
+    Binv = sp.simplify(B.inv())
+    S = sp.diag(sp.eye(3), Binv)
+    wall_psi = psi.subs(sp.Symbol("x", real=True), x)
+    wall = Wall(wall_psi, restitution=alpha, impulsive_constraints=[vy - r * wz], name="rough_wall")
+    return Scene(
+        (x, y, z, phi, theta, psi_ang),
+        metric=sp.diag(1, 1, 1, k**2, k**2, k**2),
+        constraints=[vx - r * wy, vy + r * wx, vz],
+        frame=S,
+        quasi_velocities=(vx, vy, vz, wx, wy, wz),
+        walls=[wall],
+        name=name,
+    )
+
+
+def carnot_3_13() -> Scene:
+    """Carnot paper, example 3.13: a sphere (radius r, mass 1, inertia k^2) rolling on a
+    horizontal plane hits the rough wall x = 0; written in the angular velocities
+    (quasi-velocities) with Euler angles (phi, theta, psi) as coordinates."""
+    return _rolling_sphere(sp.Symbol("x", real=True), "carnot_3_13")
+
+
+def carnot_4_4() -> Scene:
+    """Carnot paper, example 4.4: the rolling sphere of example 3.13 hits the moving wall
+    x = f(t)."""
+    f = sp.Function("f", real=True)
+    return _rolling_sphere(sp.Symbol("x", real=True) - f(t), "carnot_4_4")
+
+
+def car() -> Scene:
+    """Slides 000, "Driving a car": (x, y, theta, kappa) with the admissible directions
+    span{(cos theta, sin theta, kappa, 0), (0, 0, 0, 1)}, written as two constraints
+    (no side slip; heading rate = curvature times speed)."""
+    x, y, th, kap = coordinates("x y theta kappa")
+    xd, yd, thd, kd = velocities((x, y, th, kap))
+    m, J, c = sp.symbols("m J c", positive=True)
+    return Scene(
+        (x, y, th, kap),
+        metric=sp.diag(m, m, J, c),
+        constraints=[
+            sp.sin(th) * xd - sp.cos(th) * yd,
+            thd - kap * (sp.cos(th) * xd + sp.sin(th) * yd),
+        ],
+        name="car",
+    )
+
+
+def pendulum_on_cart(n: int) -> Scene:
+    """The n-link planar pendulum on a cart (the PyDy benchmark), declared by its kinetic and
+    potential energy: cart mass m0 at x, links of length l_i with point masses m_{i+1},
+    angles q_i from the downward vertical, gravity g."""
+    if n < 1:
+        raise ValueError("pendulum_on_cart: n must be at least 1")
+    q = coordinates(["x"] + [f"q{i}" for i in range(n)])
+    qd = velocities(q)
+    m = sp.symbols(f"m0:{n + 1}", positive=True)
+    l = sp.symbols(f"l0:{n}", positive=True)
+    g = sp.Symbol("g", positive=True)
+    T = m[0] * qd[0] ** 2 / 2
+    V = sp.S.Zero
+    vx, vy, height = qd[0], sp.S.Zero, sp.S.Zero
+    for i in range(n):
+        vx += l[i] * sp.cos(q[i + 1]) * qd[i + 1]
+        vy += l[i] * sp.sin(q[i + 1]) * qd[i + 1]
+        height -= l[i] * sp.cos(q[i + 1])
+        T += m[i + 1] * (vx**2 + vy**2) / 2
+        V += m[i + 1] * g * height
+    return Scene(q, kinetic_energy=T, potential=V, name=f"pendulum_on_cart_{n}")
+
+
+EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {
+    "bouncing_ellipse": (bouncing_ellipse, "text 001 §3.1: ellipse bouncing on a wall (elastic)"),
+    "spinning_disk": (spinning_disk, "text 001 §3.2: spinning disk, frictional impact"),
+    "carnot_3_7": (carnot_3_7, "Carnot paper ex. 3.7: disc hits a rough wall"),
+    "carnot_3_13": (carnot_3_13, "Carnot paper ex. 3.13: rolling sphere hits a rough wall"),
+    "carnot_4_4": (carnot_4_4, "Carnot paper ex. 4.4: rolling sphere hits a moving wall"),
+    "car": (car, "slides 000: car with curvature state (non-holonomic)"),
+    "pendulum_on_cart_3": (lambda: pendulum_on_cart(3), "3-link pendulum on a cart"),
+}
+
+
+def example(name: str) -> Scene:
+    """The built-in scene called ``name`` (see :data:`EXAMPLES`)."""
+    try:
+        build = EXAMPLES[name][0]
+    except KeyError:
+        from symmech.errors import SceneError
+
+        raise SceneError(
+            f"no built-in scene named {name!r}; choose one of {sorted(EXAMPLES)}"
+        ) from None
+    return build()

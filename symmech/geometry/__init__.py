@@ -1,0 +1,1 @@
+"""Geometry layer: Christoffel symbols, connections in frames, Lie brackets, Frobenius."""

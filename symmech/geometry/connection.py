@@ -1,0 +1,241 @@
+"""Christoffel symbols, connection coefficients in a frame, and the forcing term.
+
+Conventions (slides 000, "Geodesics in coordinates" and "Connection coefficients in a
+nonholonomic basis"; Carnot paper 002, eq. 2):
+
+* Coordinates: ``Gamma_kij = 1/2 (d_i g_jk + d_j g_ik - d_k g_ij)`` (first kind) and
+  ``Gamma^k_ij = g^kl Gamma_lij`` (second kind); the geodesic equation with a potential is
+  ``q_ddot^k + Gamma^k_ij q_dot^i q_dot^j = -g^kl dV/dq^l``.
+* A frame ``u_k`` (columns of S, ``q_dot = S v``) with commutation coefficients
+  ``[u_k, u_l] = c^m_kl u_m``: ``nabla_{u_i} u_j = omega^m_ij u_m`` with, by the Koszul
+  formula, ``omega_mij = g(nabla_{u_i} u_j, u_m) =
+  1/2 (u_i(g_jm) + u_j(g_im) - u_m(g_ij) + c_ijm - c_imj - c_jmi)``, ``c_abm = g_mp c^p_ab``.
+  The slides print ``... + c_mkl + c_mlk - c_klm`` which agrees with this in the part
+  symmetric in (k, l) (all that enters the equations of motion) but has the opposite sign
+  on ``c_klm``; with the printed sign the connection would not be torsion-free
+  (``omega^m_kl - omega^m_lk`` must equal ``c^m_kl``).  The tests check torsion-freeness
+  and metric compatibility, so the Koszul form is used.
+* Equations of motion in the velocity basis (Kane / Hamel form, slides "Kane's method of
+  quasi-velocities"): ``M v_dot = f`` with
+  ``f_k = -omega_kij v^i v^j - u_k(V)``; in coordinates ``omega = Gamma`` and
+  ``f_k = -Gamma_kij q_dot^i q_dot^j - dV/dq^k`` (first kind: no inverse is needed).
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+
+import sympy as sp
+
+from symmech.geometry.derivatives import Derivative
+from symmech.geometry.simplification import Level, tidy, tidy_matrix
+
+__all__ = [
+    "christoffel_first_kind",
+    "christoffel_second_kind",
+    "connection_coefficients",
+    "connection_first_kind",
+    "forcing",
+]
+
+
+def _lowered(
+    G: sp.MatrixBase,
+    D: Derivative,
+    c: sp.Array | None,
+    k: int,
+    i: int,
+    j: int,
+) -> sp.Expr:
+    """omega_kij = g(nabla_{u_i} u_j, u_k) (Koszul formula; c = None for coordinates)."""
+    out = (D(G[j, k], i) + D(G[i, k], j) - D(G[i, j], k)) / 2
+    if c is not None:
+        n = G.rows
+
+        def low(a: int, b: int, m: int) -> sp.Expr:  # c_abm = g_mp c^p_ab
+            return sp.Add(*[G[m, p] * c[p, a, b] for p in range(n) if c[p, a, b] != 0])
+
+        out += (low(i, j, k) - low(i, k, j) - low(j, k, i)) / 2
+    return out
+
+
+def christoffel_first_kind(
+    g: sp.MatrixBase, q: Sequence[sp.Symbol], level: Level = "full"
+) -> sp.ImmutableDenseNDimArray:
+    """Gamma_kij = 1/2 (d_i g_jk + d_j g_ik - d_k g_ij) as an Array ``[k, i, j]``.
+
+    Slides 000, "Geodesics in coordinates" (the bracketed sum before raising the index).
+    Computed for i <= j only and mirrored; derivatives of entries that do not contain a
+    coordinate are never formed.
+    """
+    D = Derivative(q)
+    n = len(q)
+    out = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(n)]
+    for k in range(n):
+        for i in range(n):
+            for j in range(i, n):
+                val = tidy(_lowered(g, D, None, k, i, j), level)
+                out[k][i][j] = out[k][j][i] = val
+    return sp.ImmutableDenseNDimArray(out)
+
+
+def _inverse(g: sp.MatrixBase, level: Level) -> sp.Matrix:
+    if g.is_diagonal():
+        return sp.diag(*[1 / g[i, i] for i in range(g.rows)])
+    return tidy_matrix(g.inv(method="LU"), level)
+
+
+def christoffel_second_kind(
+    g: sp.MatrixBase, q: Sequence[sp.Symbol], level: Level = "full"
+) -> sp.ImmutableDenseNDimArray:
+    """Gamma^k_ij = g^kl Gamma_lij as an Array ``[k, i, j]`` (slides 000, Christoffel symbol).
+
+    Needs the symbolic inverse of g; meant for systems of moderate size.  For the equations
+    of motion of large systems use :func:`forcing` (first kind, no inverse).
+    """
+    n = len(q)
+    first = christoffel_first_kind(g, q, level="none")
+    ginv = _inverse(g, level)
+    out = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(n)]
+    for i in range(n):
+        for j in range(i, n):
+            for k in range(n):
+                val = sp.Add(*[ginv[k, l] * first[l, i, j] for l in range(n) if ginv[k, l] != 0])
+                out[k][i][j] = out[k][j][i] = tidy(val, level)
+    return sp.ImmutableDenseNDimArray(out)
+
+
+def connection_first_kind(
+    G: sp.MatrixBase,
+    q: Sequence[sp.Symbol],
+    frame: sp.MatrixBase | None,
+    commutation: sp.Array | None,
+    level: Level = "full",
+) -> sp.ImmutableDenseNDimArray:
+    """omega_kij = g(nabla_{u_i} u_j, u_k) as an Array ``[k, i, j]`` (Koszul formula).
+
+    ``G`` is the metric in the frame, ``frame`` the matrix S whose columns are the u_i in
+    coordinates q (None: coordinate frame) and ``commutation[m, k, l] = c^m_kl``.
+    """
+    n = len(q)
+    D = Derivative(q, frame)
+    c = None if frame is None else commutation
+    return sp.ImmutableDenseNDimArray(
+        [[[tidy(_lowered(G, D, c, k, i, j), level) for j in range(n)] for i in range(n)] for k in range(n)]
+    )
+
+
+def connection_coefficients(
+    G: sp.MatrixBase,
+    q: Sequence[sp.Symbol],
+    frame: sp.MatrixBase | None,
+    commutation: sp.Array | None,
+    level: Level = "full",
+) -> sp.ImmutableDenseNDimArray:
+    """omega^m_ij with ``nabla_{u_i} u_j = omega^m_ij u_m``, an Array ``[m, i, j]``.
+
+    Slides 000, "Connection coefficients in a nonholonomic basis" (sign of the c_klm term
+    re-derived, see the module docstring).  Equals Gamma^m_ij in a coordinate frame.
+    """
+    n = len(q)
+    low = connection_first_kind(G, q, frame, commutation, level="none")
+    Ginv = _inverse(G, level)
+    return sp.ImmutableDenseNDimArray(
+        [
+            [
+                [
+                    tidy(sp.Add(*[Ginv[m, k] * low[k, i, j] for k in range(n) if Ginv[m, k] != 0]), level)
+                    for j in range(n)
+                ]
+                for i in range(n)
+            ]
+            for m in range(n)
+        ]
+    )
+
+
+def forcing(
+    G: sp.MatrixBase,
+    V: sp.Expr,
+    q: Sequence[sp.Symbol],
+    v: Sequence[sp.Symbol],
+    frame: sp.MatrixBase | None = None,
+    commutation: sp.Array | None = None,
+    level: Level = "none",
+) -> sp.Matrix:
+    """f with ``G v_dot = f``: ``f_k = -omega_kij v^i v^j - u_k(V)`` (first kind, no inverse).
+
+    In coordinates this is ``f_k = -Gamma_kij q_dot^i q_dot^j - dV/dq^k`` (slides 000,
+    geodesic equation; Carnot paper eq. 2 multiplied by g).  Only the part of omega
+    symmetric in (i, j) contributes; it is formed for i <= j, with zero metric derivatives
+    skipped, so the cost grows with the number of non-zero terms, not n^3.
+    """
+    n = len(q)
+    D = Derivative(q, frame)
+    if frame is None:
+        return _forcing_coordinates(G, V, q, v, D, level)
+    c = commutation
+    rows = []
+    for k in range(n):
+        terms = []
+        for i in range(n):
+            for j in range(i, n):
+                w = _lowered(G, D, c, k, i, j)
+                if c is not None:
+                    # the symmetric part only: drop the antisymmetric c_ijk contribution
+                    w = (w + _lowered(G, D, c, k, j, i)) / 2
+                if w == 0:
+                    continue
+                terms.append(w * v[i] ** 2 if i == j else 2 * w * v[i] * v[j])
+        rows.append(tidy(-sp.Add(*terms) - D(sp.sympify(V), k), level))
+    return sp.Matrix(rows)
+
+
+def _forcing_coordinates(
+    G: sp.MatrixBase,
+    V: sp.Expr,
+    q: Sequence[sp.Symbol],
+    v: Sequence[sp.Symbol],
+    D: Derivative,
+    level: Level,
+) -> sp.Matrix:
+    """Sparse assembly of ``f_k = -Gamma_kij v^i v^j - dV/dq^k`` from the metric derivatives.
+
+    With ``Gamma_kij v^i v^j = sum_ij (d_i g_jk - 1/2 d_k g_ij) v^i v^j``, every non-zero
+    derivative ``d = d g_ij / d q^a`` (i <= j) is visited once and scattered:
+    ``+1/2 d v^i v^j`` (counted for (i, j) and (j, i)) into f_a, and ``-d v^a v^j`` into f_i,
+    ``-d v^a v^i`` into f_j.  Terms are grouped by velocity monomial, so each f_k reads
+    ``sum (-Gamma_kij) v^i v^j`` with one coefficient per monomial.  Cost: the number of
+    non-zero metric derivatives, not n^3.
+    """
+    n = len(q)
+    acc: list[dict[tuple[int, int], list[sp.Expr]]] = [defaultdict(list) for _ in range(n)]
+
+    def add(k: int, i: int, j: int, term: sp.Expr) -> None:
+        acc[k][(i, j) if i <= j else (j, i)].append(term)
+
+    for i in range(n):
+        for j in range(i, n):
+            gij = G[i, j]
+            fs = D.free_symbols(gij)
+            if not fs:
+                continue
+            for a in range(n):
+                if q[a] not in fs:
+                    continue
+                d = D(gij, a)
+                if d == 0:
+                    continue
+                if i == j:
+                    add(a, i, i, d / 2)
+                    add(i, a, i, -d)
+                else:
+                    add(a, i, j, d)
+                    add(i, a, j, -d)
+                    add(j, a, i, -d)
+    rows = []
+    for k in range(n):
+        terms = [sp.Add(*coefs) * v[i] * v[j] for (i, j), coefs in acc[k].items()]
+        rows.append(tidy(sp.Add(*terms) - D(sp.sympify(V), k), level))
+    return sp.Matrix(rows)

@@ -1,0 +1,33 @@
+"""Impacts layer: impact maps of walls with restitution and instantaneous constraints.
+
+* :func:`derive_impact_map` / :class:`ImpactMap`: the closed-form post-impact velocity of
+  a wall (Carnot paper 002: eq. 10, Prop. 3.4, eq. 17, Prop. 4.2; text 001: Theorem 2.12
+  and the energy law of section 3.2).  ``Scene.impact_map(wall)`` is the usual entry point.
+* :class:`CarnotResult`: the residual of Carnot's theorems 3.2/3.6/3.9/3.11/4.1/4.3.
+* :func:`kkt_post_velocity`: the independent impulse-momentum (KKT) route, for
+  cross-checks.
+* :mod:`symmech.impacts.stability`: the stabilising step for float64 evaluation.
+"""
+
+from symmech.impacts.carnot import CarnotResult
+from symmech.impacts.degeneracy import Singularity
+from symmech.impacts.energy_law import EnergyLaw
+from symmech.impacts.impact_map import LAWS, ImpactMap, derive_impact_map
+from symmech.impacts.kkt import kkt_post_velocity
+from symmech.impacts.projectors import ImpactProjectors, impact_projectors
+from symmech.impacts.stability import stable_coefficient, stable_linear, stable_matrix
+
+__all__ = [
+    "LAWS",
+    "CarnotResult",
+    "EnergyLaw",
+    "ImpactMap",
+    "ImpactProjectors",
+    "Singularity",
+    "derive_impact_map",
+    "impact_projectors",
+    "kkt_post_velocity",
+    "stable_coefficient",
+    "stable_linear",
+    "stable_matrix",
+]

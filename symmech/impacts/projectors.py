@@ -1,0 +1,222 @@
+"""The projectors of an impact (Carnot paper (002), sections 3.1, 3.2, 4.1, 4.2).
+
+Everything is written in the *velocity basis* of the scene (coordinate velocities, or
+quasi-velocities v with ``q_dot = S v``); a matrix acts on velocity columns.  Inputs:
+
+* ``g`` (n x n), the metric in the velocity basis, ``T = 1/2 v^T g v``;
+* ``mu`` (m x n), permanent constraints ``mu v = 0``, with the projectors (P, Q) onto
+  D = ker mu and D^perp (:func:`symmech.constraints.projectors.projectors`);
+* ``dpsi`` (1 x n), the wall one-form ``d psi`` in the velocity basis: ``(d psi/d q) S``;
+* ``nu`` (l x n), the instantaneous (impulsive) constraints nu^A, A = 1..l.
+
+With ``A = [dpsi; nu]`` ((l+1) x n) the paper's objects are
+
+* ``Y^A = g^{-1} A_A^T`` (``Y^0 = grad psi``), the columns of ``Y``;
+* ``P(Y^A)``, the columns of ``PY``;
+* ``C^{AB} = g(P Y^A, P Y^B)``, computed as ``A_A P Y^B`` (equal because P is a
+  g-self-adjoint idempotent); ``C_{AB}`` its inverse ``K``;
+* ``beta^B = g(P Y^B, .)``, the rows of ``beta = PY^T g``;
+* ``QQ = sum C_AB P(Y^A) (x) beta^B = PY K beta`` and ``PP = id - QQ`` (section 3.2);
+* ``T~ = sum_A C_A0 P(Y^A) (x) beta^0 = N beta^0`` with ``N = PY K e_0`` (Prop. 3.4);
+* ``Q~ = C^{-1} P(grad psi) (x) beta`` with ``C = C^{00}``, ``P~ = id - Q~`` (eq. 7).
+
+Facts used below (all follow from the definitions and are checked in the tests):
+``beta PY = C``; ``A PY = C``; hence ``dpsi(N) = 1``, ``beta^0(N) = 1``, ``T~`` is
+idempotent, ``QQ N = N`` and ``g(PP u, N) = 0`` (Lemma 3.5).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import sympy as sp
+from sympy.polys.matrices import DomainMatrix
+
+from symmech.constraints.projectors import projectors as permanent_projectors
+from symmech.constraints.projectors import solve_spd
+from symmech.geometry.simplification import Level, tidy, tidy_matrix
+from symmech.impacts.quadratic import common_domain
+
+__all__ = ["ImpactProjectors", "impact_projectors"]
+
+
+@dataclass(frozen=True)
+class ImpactProjectors:
+    """The objects of the Carnot paper for one wall (see the module docstring).
+
+    Attributes use the paper's names: ``P``, ``Q`` (permanent constraints), ``Y``
+    (columns ``Y^0 = grad psi``, ``Y^A``), ``PY`` (columns ``P(Y^A)``), ``C`` (``C^{AB}``),
+    ``K`` (``C_{AB}``, the inverse of C), ``beta`` (rows ``beta^B``), ``QQ`` and ``PP``
+    (section 3.2), ``T`` (T~, Prop. 3.4), ``Qt`` and ``Pt`` (Q~ and P~, eq. 7) and ``N``
+    (the column ``sum_A C_A0 P(Y^A)`` spanning Im T~).
+    """
+
+    g: sp.ImmutableMatrix
+    mu: sp.ImmutableMatrix
+    dpsi: sp.ImmutableMatrix
+    nu: sp.ImmutableMatrix
+    P: sp.ImmutableMatrix
+    Q: sp.ImmutableMatrix
+    Y: sp.ImmutableMatrix
+    PY: sp.ImmutableMatrix
+    C: sp.ImmutableMatrix
+    K: sp.ImmutableMatrix
+    beta: sp.ImmutableMatrix
+    QQ: sp.ImmutableMatrix
+    PP: sp.ImmutableMatrix
+    T: sp.ImmutableMatrix
+    Qt: sp.ImmutableMatrix
+    Pt: sp.ImmutableMatrix
+    N: sp.ImmutableMatrix
+
+    @property
+    def A(self) -> sp.ImmutableMatrix:
+        """The stacked one-forms ``[d psi; nu^1; ...; nu^l]`` ((l+1) x n)."""
+        return sp.ImmutableMatrix(sp.Matrix(self.dpsi).col_join(sp.Matrix(self.nu)))
+
+    @property
+    def grad_psi(self) -> sp.ImmutableMatrix:
+        """``Y^0 = grad psi = g^{-1} d psi^T`` (n x 1)."""
+        return sp.ImmutableMatrix(self.Y[:, 0])
+
+
+def _inverse(C: sp.Matrix, level: Level) -> sp.Matrix:
+    k = C.rows
+    if k == 1:
+        return sp.Matrix([[tidy(1 / C[0, 0], level)]])
+    if C.is_diagonal():
+        return sp.diag(*[tidy(1 / C[i, i], level) for i in range(k)])
+    return tidy_matrix(C.inv(method="LU"), level)
+
+
+def impact_projectors(
+    g: sp.MatrixBase,
+    mu: sp.MatrixBase,
+    dpsi: sp.MatrixBase,
+    nu: sp.MatrixBase,
+    level: Level = "light",
+    check: Callable[[sp.Matrix, sp.Matrix], None] | None = None,
+) -> ImpactProjectors:
+    """Build P, Q, Y^A, P(Y^A), C^AB, C_AB, beta^B, QQ, PP, T~, Q~, P~ (Carnot paper 002).
+
+    Section 2.2 (P, Q), eq. 7 (Q~, P~), section 3.2 and Prop. 3.4 (QQ, PP, T~).  ``level``
+    is the simplification level of :mod:`symmech.geometry.simplification` applied to the
+    intermediate results; with a level other than ``"none"`` the algebra is done exactly
+    in a fraction field when possible (:func:`_in_field`), which yields cancelled
+    entries directly.  ``check(C, PY)``, if given, is called before C is inverted
+    (see :func:`symmech.impacts.degeneracy.check_regular`) and may raise.
+    """
+    g = sp.Matrix(g)
+    n = g.rows
+    mu = sp.Matrix(mu) if mu.rows else sp.zeros(0, n)
+    dpsi = sp.Matrix(dpsi)
+    nu = sp.Matrix(nu) if nu.rows else sp.zeros(0, n)
+    if level != "none":
+        fast = _in_field(g, mu, dpsi, nu, check)
+        if fast is not None:
+            return fast
+    P, Q = permanent_projectors(g, mu, level)
+    A = dpsi.col_join(nu)
+    Y = solve_spd(g, A.T, level)
+    PY = tidy_matrix(P * Y, level)
+    C = tidy_matrix(A * PY, level)
+    # C is symmetric in exact arithmetic; symmetrise the printed form.
+    for i in range(C.rows):
+        for j in range(i + 1, C.cols):
+            C[j, i] = C[i, j]
+    if check is not None:
+        check(C, PY)
+    K = _inverse(C, level)
+    beta = tidy_matrix(PY.T * g, level)
+    QQ = tidy_matrix(PY * K * beta, level)
+    PP = tidy_matrix(sp.eye(n) - QQ, level)
+    N = tidy_matrix(PY * K[:, 0], level)
+    T = tidy_matrix(N * beta[0, :], level)
+    Qt = tidy_matrix(PY[:, 0] * beta[0, :] / C[0, 0], level)
+    Pt = tidy_matrix(sp.eye(n) - Qt, level)
+    return _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N)
+
+
+def _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N) -> ImpactProjectors:
+    im = sp.ImmutableMatrix
+    return ImpactProjectors(
+        g=im(g),
+        mu=im(mu),
+        dpsi=im(dpsi),
+        nu=im(nu),
+        P=im(P),
+        Q=im(Q),
+        Y=im(Y),
+        PY=im(PY),
+        C=im(C),
+        K=im(K),
+        beta=im(beta),
+        QQ=im(QQ),
+        PP=im(PP),
+        T=im(T),
+        Qt=im(Qt),
+        Pt=im(Pt),
+        N=im(N),
+    )
+
+
+def _in_field(
+    g: sp.Matrix,
+    mu: sp.Matrix,
+    dpsi: sp.Matrix,
+    nu: sp.Matrix,
+    check: Callable[[sp.Matrix, sp.Matrix], None] | None,
+) -> ImpactProjectors | None:
+    """The same construction in exact field arithmetic (the fraction field of the
+    parameters, with sin, cos, radicals... as generators; see
+    :mod:`symmech.impacts.quadratic`).  Every entry comes out as a cancelled fraction, so no
+    intermediate simplification is needed.  Returns None if no such field exists."""
+    ring = common_domain([g, mu, dpsi, nu])
+    if ring.K is None:
+        return None
+    n = g.rows
+    Kf = ring.K
+    G = ring.matrix(g)
+    eye = DomainMatrix.eye(n, Kf)
+    Ginv = G.inv()
+    if mu.rows:
+        MU = ring.matrix(mu)
+        Z = Ginv * MU.transpose()
+        Qd = Z * (MU * Z).inv() * MU
+    else:
+        Qd = DomainMatrix.zeros((n, n), Kf)
+    Pd = eye - Qd
+    A = ring.matrix(dpsi.col_join(nu))
+    Yd = Ginv * A.transpose()
+    PYd = Pd * Yd
+    Cd = A * PYd
+    out = ring.to_sympy_matrix
+    C, PY = out(Cd), out(PYd)
+    if check is not None:
+        check(C, PY)
+    Kd = Cd.inv()
+    betad = PYd.transpose() * G
+    QQd = PYd * Kd * betad
+    Nd = PYd * Kd[:, 0]
+    Td = Nd * betad[0, :]
+    Qtd = (PYd[:, 0] * betad[0, :]) * Kf.quo(Kf.one, Cd[0, 0].element)
+    return _pack(
+        g,
+        mu,
+        dpsi,
+        nu,
+        out(Pd),
+        out(Qd),
+        out(Yd),
+        PY,
+        C,
+        out(Kd),
+        out(betad),
+        out(QQd),
+        out(eye - QQd),
+        out(Td),
+        out(Qtd),
+        out(eye - Qtd),
+        out(Nd),
+    )

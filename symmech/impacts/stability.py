@@ -1,0 +1,141 @@
+"""Numerically stable closed forms for impact maps (the "stabilising step").
+
+Impact maps are evaluated in float64 by generated code.  Written the way the projector
+algebra produces them, their entries are often differences of nearly equal terms, e.g.
+``1 - m R^2/(I + m R^2)`` (which is ``I/(I + m R^2)``), or text 001's (section 3.2) rebound
+coefficient ``I/m - I^2 R^2/I1^2 - I^3/(m I1^2)`` with ``I1 = I + m R^2``, which equals
+``I R^2/I1`` and loses every digit in float64 when ``m R^2 << I``.
+
+The stabilising step implemented here is:
+
+1. **Per-coefficient normal form.** An expression linear (or quadratic) in the velocities
+   is split into its coefficients (functions of q, t and the parameters only); each
+   coefficient is put over a common denominator with :func:`sympy.cancel` (this is what
+   combines ``1 - x/(x + y)`` into ``y/(x + y)``) and its numerator and denominator are
+   factored with :func:`sympy.factor` (so a product is not expanded into a sum of
+   monomials that cancel each other numerically).  The velocities themselves are never
+   put over a common denominator, because that would mix terms of very different sizes.
+2. **Sums of squares for square roots.** The energy law (text 001, section 3.2) needs
+   ``sqrt(b^T C^{-1} b / (C^{-1})_{00})``.  The argument is written as
+   ``y_0^2 + sum_A (D_0/D_A) y_A^2`` from an LDL^T factorisation of C (see
+   :func:`symmech.impacts.energy_law`), a sum of non-negative terms which cannot cancel
+   and is never negative in floating point.
+
+Expressions above :data:`STABLE_MAX_OPS` operations are left as they are (the cost of
+``factor`` grows quickly); this mirrors :mod:`symmech.geometry.simplification`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+import sympy as sp
+
+__all__ = ["STABLE_MAX_OPS", "stable_coefficient", "stable_linear", "stable_matrix"]
+
+#: Coefficients with more operations than this are cancelled but not factored.
+STABLE_MAX_OPS = 600
+
+
+def _state_generators(expr: sp.Expr, state: frozenset) -> list[sp.Expr]:
+    """Generators of ``expr`` that depend on the state: state symbols and function
+    atoms (sin(theta), sqrt(...), f(t)) whose arguments contain a state symbol."""
+    gens: set[sp.Expr] = {s for s in expr.free_symbols if s in state}
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, (sp.Function, sp.Derivative)) or (
+            isinstance(node, sp.Pow) and not node.exp.is_Integer
+        ):
+            if node.free_symbols & state:
+                gens.add(node)
+    return sorted(gens, key=sp.default_sort_key)
+
+
+def _collect_factor(f: sp.Expr, state: frozenset) -> sp.Expr:
+    """An irreducible sum, written as ``sum_k c_k(params) * monomial_k(state)`` with each
+    parameter coefficient factored (``a^4 - 2 a^2 b^2 + b^4 -> (a - b)^2 (a + b)^2``)."""
+    if not isinstance(f, sp.Add) or not state:
+        return f
+    gens = _state_generators(f, state)
+    if not gens:
+        return f
+    try:
+        poly = sp.Poly(f, *gens)
+    except sp.PolynomialError:  # pragma: no cover - non-polynomial in the generators
+        return f
+    if len(poly.terms()) < 2:
+        return f
+    out = sp.S.Zero
+    for monom, coeff in poly.terms():
+        term = sp.factor(coeff)
+        for gen, power in zip(gens, monom, strict=True):
+            term *= gen**power
+        out += term
+    return out
+
+
+def _refactor(product: sp.Expr, state: frozenset) -> sp.Expr:
+    if isinstance(product, sp.Mul):
+        return sp.Mul(*[_refactor(a, state) for a in product.args])
+    if isinstance(product, sp.Pow) and product.exp.is_Integer:
+        return _refactor(product.base, state) ** product.exp
+    return _collect_factor(product, state)
+
+
+def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Expr:
+    """Return ``factor(numerator)/factor(denominator)`` of ``cancel(expr)``.
+
+    Combines differences of nearly equal rational terms (``1 - x/(x+y) -> y/(x+y)``) and
+    keeps numerator and denominator as products.  An irreducible factor that involves the
+    ``state`` (coordinates, time) is written as a sum over its state monomials with
+    factored parameter coefficients, so ``I + m (a^4 - 2 a^2 b^2 + b^4) sin^2`` becomes
+    ``I + m (a - b)^2 (a + b)^2 sin^2`` (no cancellation when a ~ b).  Expressions with more
+    than :data:`STABLE_MAX_OPS` operations are returned unchanged.
+
+    >>> import sympy as sp
+    >>> I, m, R = sp.symbols("I m R", positive=True)
+    >>> I1 = I + m*R**2
+    >>> stable_coefficient(I/m - I**2*R**2/I1**2 - I**3/(m*I1**2))
+    I*R**2/(I + R**2*m)
+    """
+    expr = sp.sympify(expr)
+    if expr.is_number or expr.is_Symbol:
+        return sp.nsimplify(expr) if isinstance(expr, sp.Float) else expr
+    if sp.count_ops(expr) > STABLE_MAX_OPS:
+        return expr
+    c = sp.cancel(sp.together(expr))
+    num, den = sp.fraction(c)
+    try:
+        num, den = sp.factor(num), sp.factor(den)
+    except sp.PolynomialError:  # pragma: no cover - factor refuses some exotic generators
+        return c
+    st = frozenset(state)
+    return _refactor(num, st) / _refactor(den, st)
+
+
+def stable_linear(
+    expr: sp.Expr, velocities: Sequence[sp.Symbol], state: Iterable[sp.Symbol] = ()
+) -> sp.Expr:
+    """Stable form of an expression affine in ``velocities``: ``sum_j c_j v_j + c_0``.
+
+    Each coefficient ``c_j`` goes through :func:`stable_coefficient`; the velocities are
+    not put over a common denominator.  Raises ``ValueError`` if ``expr`` is not affine.
+    """
+    expr = sp.sympify(expr)
+    v = list(velocities)
+    present = [vj for vj in v if vj in expr.free_symbols]
+    if not present:
+        return stable_coefficient(expr, state)
+    coeffs = [sp.diff(expr, vj) for vj in present]
+    if any(c.free_symbols & set(v) for c in coeffs):
+        raise ValueError(f"stable_linear: {expr} is not affine in {v}")
+    constant = expr.subs(dict.fromkeys(present, 0))
+    out = stable_coefficient(constant, state)
+    for vj, c in zip(present, coeffs, strict=True):
+        out += stable_coefficient(c, state) * vj
+    return out
+
+
+def stable_matrix(M: sp.MatrixBase, state: Iterable[sp.Symbol] = ()) -> sp.Matrix:
+    """Apply :func:`stable_coefficient` to every entry of ``M``."""
+    st = tuple(state)
+    return sp.Matrix(M.rows, M.cols, [stable_coefficient(e, st) for e in M])

@@ -1,0 +1,403 @@
+"""The Scene: a declared mechanical system and everything symmech derives from it.
+
+A :class:`Scene` is immutable.  Each derived quantity is computed lazily, once, when first
+asked for, and cached; nothing is derived at construction beyond validation.
+
+Layering: ``Scene`` is a facade over the layers to its left (declaration -> geometry ->
+constraints -> impacts); those layers work on plain sympy matrices and never import it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any
+
+import sympy as sp
+
+from symmech.constraints.dynamics import constrained_acceleration, constraint_rate, multipliers
+from symmech.constraints.projectors import gradients, gram, projectors, solve_spd
+from symmech.declaration.spec import Declaration, ResolvedWall, declare
+from symmech.declaration.wall import Wall
+from symmech.errors import SceneError
+from symmech.geometry.connection import (
+    christoffel_first_kind,
+    christoffel_second_kind,
+    connection_coefficients,
+    forcing,
+)
+from symmech.geometry.lie import commutation_coefficients
+from symmech.geometry.simplification import Level, tidy_matrix
+from symmech.impacts import ImpactMap, derive_impact_map
+
+__all__ = ["Scene"]
+
+
+class Scene:
+    r"""A mechanical system: coordinates q, kinetic metric g(q), potential V(q), linear
+    constraints mu(q) q_dot = 0, an optional frame of quasi-velocities, and walls.
+
+    The equations of motion it derives are (Carnot paper, eqs. 2 and 5; slides 000)
+
+    .. math::  g(q)\,\ddot q = f(q,\dot q,t) + \mu^T\lambda,\qquad \mu(q)\,\dot q = 0,
+
+    with ``f_k = -Gamma_kij q_dot^i q_dot^j - dV/dq^k``.  With a frame ``q_dot = S(q) v``
+    the metric, constraints and impulsive constraints are written in the quasi-velocities
+    v and the same equations hold with v in place of q_dot and the connection coefficients
+    of the frame in place of Gamma (Kane / Hamel form).
+
+    Parameters
+    ----------
+    coordinates:
+        The coordinates, sympy Symbols (see :func:`symmech.coordinates`).
+    metric, kinetic_energy:
+        Exactly one: the n x n kinetic metric, or the kinetic energy T as a quadratic form in
+        the velocities (:func:`symmech.velocities`, or the quasi-velocities).
+    potential:
+        V(q) (may depend on :data:`symmech.t`); default 0.
+    constraints:
+        Linear velocity constraints: expressions linear in the velocities, or coefficient
+        rows.
+    frame, quasi_velocities:
+        Optional frame S(q) (n x n, invertible) and the quasi-velocity symbols v with
+        ``q_dot = S v``.
+    walls:
+        :class:`symmech.Wall` objects.
+    parameters:
+        The parameter symbols, in order.  Default: every other free symbol, sorted by name.
+    name:
+        A name for messages and generated code.
+
+    Example (a disk rolling on a line, Carnot paper example 3.7 with a permanent constraint):
+
+    >>> import sympy as sp, symmech as sm
+    >>> x, y, th = sm.coordinates("x y theta")
+    >>> xd, yd, thd = sm.velocities((x, y, th))
+    >>> m, k, R = sp.symbols("m k R", positive=True)
+    >>> scene = sm.Scene((x, y, th), metric=sp.diag(m, m, m*k**2), constraints=[xd - R*thd])
+    >>> scene.projectors()[0]
+    Matrix([
+    [R**2/(R**2 + k**2), 0, R*k**2/(R**2 + k**2)],
+    [                 0, 1,                    0],
+    [     R/(R**2 + k**2), 0,     k**2/(R**2 + k**2)]])
+    """
+
+    __slots__ = ("_cache", "_decl")
+
+    def __init__(
+        self,
+        coordinates: Sequence[sp.Symbol],
+        *,
+        metric: Any = None,
+        kinetic_energy: Any = None,
+        potential: Any = 0,
+        constraints: Iterable = (),
+        frame: Any = None,
+        quasi_velocities: Sequence[sp.Symbol] | None = None,
+        walls: Iterable[Wall] = (),
+        parameters: Sequence[sp.Symbol] | None = None,
+        name: str | None = None,
+    ):
+        decl = declare(
+            coordinates,
+            metric=metric,
+            kinetic_energy=kinetic_energy,
+            potential=potential,
+            constraints=constraints,
+            frame=frame,
+            quasi_velocities=quasi_velocities,
+            walls=walls,
+            parameters=parameters,
+            name=name,
+        )
+        object.__setattr__(self, "_decl", decl)
+        object.__setattr__(self, "_cache", {})
+
+    # -- immutability -----------------------------------------------------------------
+    def __setattr__(self, key: str, value: object) -> None:
+        raise AttributeError(f"Scene is immutable; cannot set {key!r} (build a new Scene)")
+
+    def __delattr__(self, key: str) -> None:
+        raise AttributeError(f"Scene is immutable; cannot delete {key!r}")
+
+    def _cached(self, key: tuple, build: Callable[[], Any]) -> Any:
+        cache = self._cache
+        if key not in cache:
+            cache[key] = build()
+        return cache[key]
+
+    # -- declaration -----------------------------------------------------------------------
+    @property
+    def declaration(self) -> Declaration:
+        """The validated declaration in normal form."""
+        return self._decl
+
+    @property
+    def name(self) -> str:
+        return self._decl.name
+
+    @property
+    def coordinates(self) -> tuple[sp.Symbol, ...]:
+        return self._decl.coordinates
+
+    @property
+    def velocities(self) -> tuple[sp.Symbol, ...]:
+        """The velocity basis: the coordinate velocities, or the quasi-velocities."""
+        return self._decl.velocities
+
+    @property
+    def coordinate_velocities(self) -> tuple[sp.Symbol, ...]:
+        return self._decl.coordinate_velocities
+
+    @property
+    def parameters(self) -> tuple[sp.Symbol, ...]:
+        return self._decl.parameters
+
+    @property
+    def frame(self) -> sp.ImmutableMatrix | None:
+        return self._decl.frame
+
+    @property
+    def walls(self) -> tuple[ResolvedWall, ...]:
+        return self._decl.walls
+
+    @property
+    def n(self) -> int:
+        return self._decl.n
+
+    @property
+    def potential(self) -> sp.Expr:
+        return self._decl.potential
+
+    @property
+    def constraint_matrix(self) -> sp.ImmutableMatrix:
+        """Rows mu^a of the constraint one-forms (m x n, velocity basis): ``mu v = 0``."""
+        return self._decl.constraint_matrix
+
+    @property
+    def is_constrained(self) -> bool:
+        return self._decl.m > 0
+
+    @property
+    def time_dependent(self) -> bool:
+        """True when the potential or a wall depends on :data:`symmech.t`."""
+        from symmech.declaration.symbols import t
+
+        return t in self.potential.free_symbols or any(w.moving for w in self.walls)
+
+    def __repr__(self) -> str:
+        parts = [f"Scene({self.name!r}: q={list(self.coordinates)}"]
+        if self.frame is not None:
+            parts.append(f"quasi-velocities {list(self.velocities)}")
+        if self.is_constrained:
+            parts.append(f"{self._decl.m} constraints")
+        if self.walls:
+            parts.append(f"{len(self.walls)} walls")
+        return ", ".join(parts) + ")"
+
+    # -- metric and energy ------------------------------------------------------------------
+    def mass_matrix(self) -> sp.ImmutableMatrix:
+        """g (or M = S^T g S in a frame): the n x n metric in the velocity basis, ``T = 1/2 v^T M v``."""
+        return self._decl.metric
+
+    def coordinate_metric(self) -> sp.ImmutableMatrix:
+        """The metric in coordinates: g, or ``S^-T M S^-1`` for a scene declared in a frame."""
+
+        def build() -> sp.ImmutableMatrix:
+            if self.frame is None:
+                return self._decl.metric
+            Sinv = tidy_matrix(sp.Matrix(self.frame).inv(method="LU"), "full")
+            return sp.ImmutableMatrix(tidy_matrix(Sinv.T * self._decl.metric * Sinv, "full"))
+
+        return self._cached(("coordinate_metric",), build)
+
+    def kinetic_energy(self) -> sp.Expr:
+        """T = 1/2 v^T M v in the velocity basis."""
+        v = sp.Matrix(self.velocities)
+        return self._cached(("T",), lambda: sp.expand((v.T * self._decl.metric * v)[0, 0] / 2))
+
+    def energy(self) -> sp.Expr:
+        """Total energy T + V."""
+        return self.kinetic_energy() + self.potential
+
+    # -- geometry ---------------------------------------------------------------------------------
+    def christoffel(self, kind: int = 2, simplify: Level = "full") -> sp.ImmutableDenseNDimArray:
+        """Christoffel symbols of the coordinate metric, an Array of shape (n, n, n).
+
+        ``kind=2``: ``[k, i, j] = Gamma^k_ij``; ``kind=1``: ``[k, i, j] = Gamma_kij``
+        (slides 000).  ``simplify`` follows :mod:`symmech.geometry.simplification`.
+        """
+        if kind not in (1, 2):
+            raise SceneError(f"christoffel: kind must be 1 or 2, got {kind!r}")
+        fn = christoffel_first_kind if kind == 1 else christoffel_second_kind
+        return self._cached(
+            ("christoffel", kind, simplify),
+            lambda: fn(self.coordinate_metric(), self.coordinates, simplify),
+        )
+
+    def commutation_coefficients(self) -> sp.ImmutableDenseNDimArray:
+        """c^m_kl of the frame, ``[u_k, u_l] = c^m_kl u_m``, Array ``[m, k, l]`` (zero in coordinates)."""
+
+        def build() -> sp.ImmutableDenseNDimArray:
+            n = self.n
+            if self.frame is None:
+                return sp.ImmutableDenseNDimArray.zeros(n, n, n)
+            return sp.ImmutableDenseNDimArray(commutation_coefficients(self.frame, self.coordinates))
+
+        return self._cached(("commutation",), build)
+
+    def connection_coefficients(self, simplify: Level = "full") -> sp.ImmutableDenseNDimArray:
+        """omega^m_ij with ``nabla_{u_i} u_j = omega^m_ij u_m``, Array ``[m, i, j]`` (slides 000)."""
+        return self._cached(
+            ("connection", simplify),
+            lambda: connection_coefficients(
+                self._decl.metric,
+                self.coordinates,
+                self.frame,
+                self.commutation_coefficients() if self.frame is not None else None,
+                simplify,
+            ),
+        )
+
+    def forcing(self) -> sp.ImmutableMatrix:
+        """f(q, v, t) with ``M v_dot = f`` unconstrained: ``f_k = -omega_kij v^i v^j - u_k(V)``.
+
+        In coordinates ``f = -Gamma_kij q_dot^i q_dot^j - dV/dq^k`` (first kind, no inverse);
+        see :func:`symmech.geometry.connection.forcing`.
+        """
+        return self._cached(
+            ("forcing",),
+            lambda: sp.ImmutableMatrix(
+                forcing(
+                    self._decl.metric,
+                    self.potential,
+                    self.coordinates,
+                    self.velocities,
+                    self.frame,
+                    self.commutation_coefficients() if self.frame is not None else None,
+                )
+            ),
+        )
+
+    # -- constraints ---------------------------------------------------------------------------
+    def gradients(self) -> sp.ImmutableMatrix:
+        """Z = g^-1 mu^T: column a is the gradient Z^a of mu^a (Carnot §2.2)."""
+        return self._cached(
+            ("Z",), lambda: sp.ImmutableMatrix(gradients(self._decl.metric, self.constraint_matrix))
+        )
+
+    def gram(self) -> sp.ImmutableMatrix:
+        """C^ab = mu^a g^-1 mu^b (Carnot §2.2)."""
+        return self._cached(
+            ("C",), lambda: sp.ImmutableMatrix(gram(self._decl.metric, self.constraint_matrix))
+        )
+
+    def projectors(self) -> tuple[sp.ImmutableMatrix, sp.ImmutableMatrix]:
+        """(P, Q): g-orthogonal projectors onto D and D^perp, ``Q = C_ab Z^a (x) mu^b`` (Carnot §2.2)."""
+
+        def build() -> tuple[sp.ImmutableMatrix, sp.ImmutableMatrix]:
+            P, Q = projectors(self._decl.metric, self.constraint_matrix)
+            return sp.ImmutableMatrix(P), sp.ImmutableMatrix(Q)
+
+        return self._cached(("projectors",), build)
+
+    def constraint_rate(self) -> sp.ImmutableMatrix:
+        """mu_dot v, the velocity-quadratic term of the differentiated constraints."""
+        return self._cached(
+            ("rate",),
+            lambda: sp.ImmutableMatrix(
+                constraint_rate(
+                    self.constraint_matrix, self.coordinates, self._decl.q_dot(), self.velocities
+                )
+            ),
+        )
+
+    def multipliers(self, simplify: Level = "light") -> sp.ImmutableMatrix:
+        """Lagrange multipliers lambda (m x 1) with ``M v_dot = f + mu^T lambda``.
+
+        ``lambda = C^-1 (-mu_dot v - mu M^-1 f)`` (Carnot §2.2, sign re-derived; see
+        :mod:`symmech.constraints.dynamics`).
+        """
+        if not self.is_constrained:
+            raise SceneError(f"scene {self.name!r}: multipliers() needs constraints; it has none")
+        return self._cached(
+            ("lambda", simplify),
+            lambda: sp.ImmutableMatrix(
+                multipliers(
+                    self._decl.metric,
+                    self.forcing(),
+                    self.constraint_matrix,
+                    self.constraint_rate(),
+                    simplify,
+                )
+            ),
+        )
+
+    def acceleration(self, simplify: Level = "light") -> sp.ImmutableMatrix:
+        """The acceleration as an n x 1 Matrix in q, the velocities, t and the parameters.
+
+        Unconstrained: ``q_ddot = -Gamma(q_dot, q_dot) - g^-1 dV`` (geodesic equation with a
+        potential).  Constrained: ``v_dot = M^-1 (f + mu^T lambda)``, which keeps v in D.
+        With a frame it is v_dot, the rate of the quasi-velocities.  Uses a symbolic LU
+        solve; for large systems use :meth:`mass_matrix` and :meth:`forcing` instead.
+        """
+
+        def build() -> sp.ImmutableMatrix:
+            M, f = self._decl.metric, self.forcing()
+            if self.is_constrained:
+                lam = self.multipliers(simplify="none")
+                acc = constrained_acceleration(M, f, self.constraint_matrix, lam, simplify)
+            else:
+                acc = solve_spd(M, f, simplify)
+            return sp.ImmutableMatrix(acc)
+
+        return self._cached(("acceleration", simplify), build)
+
+    # -- impacts ---------------------------------------------------------------------------
+    def wall(self, wall: int | str | Wall | ResolvedWall) -> ResolvedWall:
+        """Look a wall up by index, name, or the :class:`Wall` object given at construction."""
+        walls = self.walls
+        if isinstance(wall, ResolvedWall):
+            if wall in walls:
+                return wall
+        elif isinstance(wall, bool):
+            pass
+        elif isinstance(wall, int):
+            if -len(walls) <= wall < len(walls):
+                return walls[wall]
+            raise SceneError(f"scene {self.name!r}: no wall with index {wall} ({len(walls)} walls)")
+        elif isinstance(wall, str):
+            for w in walls:
+                if w.name == wall:
+                    return w
+            names = [w.name for w in walls]
+            raise SceneError(f"scene {self.name!r}: no wall named {wall!r}; walls are {names}")
+        elif isinstance(wall, Wall):
+            for w in walls:
+                if w.wall is wall or w.wall == wall:
+                    return w
+        raise SceneError(f"scene {self.name!r}: {wall!r} is not one of its walls")
+
+    def impact_map(
+        self,
+        wall: int | str | Wall | ResolvedWall = 0,
+        law: str | None = None,
+        *,
+        wall_velocity: Sequence | sp.MatrixBase | None = None,
+    ) -> ImpactMap:
+        """The closed-form impact map of ``wall`` (index, name or Wall); see :class:`ImpactMap`.
+
+        ``v+ = matrix v- + offset`` with the Newton law (Carnot paper eq. 10, Prop. 3.4,
+        eq. 17, Prop. 4.2), or the energy-conserving rebound of text 001 section 3.2 with
+        ``law="energy"``.  Cached per wall and law (unless ``wall_velocity`` is given).
+        """
+        resolved = self.wall(wall)
+        if wall_velocity is not None:
+            return derive_impact_map(self._decl, resolved, law, wall_velocity=wall_velocity)
+        return self._cached(
+            ("impact", resolved.index, law),
+            lambda: derive_impact_map(self._decl, resolved, law),
+        )
+
+    def kinematics(self) -> sp.ImmutableMatrix:
+        """q_dot in the velocity basis: ``S v`` with a frame, else the velocity symbols."""
+        return self._decl.q_dot()

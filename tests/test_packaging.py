@@ -1,0 +1,87 @@
+"""Packaging: the wheel ships the templates, the package list is complete, imports are lean,
+and the layers import only to their left."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PKG = ROOT / "symmech"
+
+# declaration -> geometry -> constraints -> impacts -> scene -> examples -> cli
+LAYERS = ["errors", "declaration", "geometry", "constraints", "impacts", "scene", "examples", "cli"]
+
+
+def _layer_of(module: str) -> int | None:
+    parts = module.split(".")
+    if parts[0] != "symmech" or len(parts) == 1:
+        return None
+    name = parts[1]
+    return LAYERS.index(name) if name in LAYERS else None
+
+
+def test_package_list_names_every_subpackage():
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    listed = set(config["tool"]["setuptools"]["packages"])
+    found = {
+        ".".join(p.parent.relative_to(ROOT).parts)
+        for p in PKG.rglob("__init__.py")
+        if "__pycache__" not in p.parts
+    }
+    assert found <= listed, f"sub-packages missing from pyproject.toml: {sorted(found - listed)}"
+    assert "symmech.templates" in listed
+
+
+def test_layers_import_only_to_their_left():
+    bad = []
+    for path in PKG.rglob("*.py"):
+        rel = path.relative_to(ROOT).with_suffix("")
+        module = ".".join(rel.parts).removesuffix(".__init__")
+        own = _layer_of(module)
+        if own is None:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            targets = []
+            if isinstance(node, ast.ImportFrom) and node.module:
+                targets = [node.module]
+            elif isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            for target in targets:
+                other = _layer_of(target)
+                if other is not None and other > own:
+                    bad.append(f"{module} (layer {LAYERS[own]}) imports {target}")
+    assert not bad, "\n".join(bad)
+
+
+def test_import_pulls_only_core_dependencies():
+    code = (
+        "import sys, symmech\n"
+        "print('\\n'.join(sorted({m.split('.')[0] for m in sys.modules})))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    loaded = set(out.stdout.split())
+    for heavy in ("scipy", "matplotlib", "symengine", "pytest", "hypothesis", "IPython"):
+        assert heavy not in loaded, f"import symmech loads {heavy}"
+    assert {"sympy", "numpy", "mpmath"} <= loaded
+
+
+def test_wheel_ships_templates(tmp_path):
+    """Build the wheel and check the top-level templates/ folder is inside it."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(tmp_path), str(ROOT)],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    (wheel,) = tmp_path.glob("symmech-*.whl")
+    names = zipfile.ZipFile(wheel).namelist()
+    assert "symmech/templates/README.md" in names
+    assert "symmech/templates/__init__.py" in names
+    templates = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "templates").rglob("*.jinja"))
+    for t in templates:
+        assert "symmech/" + t in names, f"{t} missing from the wheel"
