@@ -57,7 +57,9 @@ def _show(scene: Scene, latex: bool, progress: _Progress) -> None:
         progress("Christoffel symbols")
         gam = scene.christoffel()
         nonzero = {
-            f"Gamma^{scene.coordinates[k]}_{scene.coordinates[i]}{scene.coordinates[j]}": gam[k, i, j]
+            f"Gamma^{scene.coordinates[k]}_{scene.coordinates[i]}{scene.coordinates[j]}": gam[
+                k, i, j
+            ]
             for k in range(scene.n)
             for i in range(scene.n)
             for j in range(i, scene.n)

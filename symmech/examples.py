@@ -47,7 +47,7 @@ def spinning_disk(law: str = "energy") -> Scene:
     """Text 001, section 3.2: a spinning disk (mass m, inertia I, radius R) hits the rough
     wall x = 0 from the side x > 0; at impact it rolls on the wall, ``y_dot + R theta_dot = 0``."""
     x, y, th = coordinates("x y theta")
-    xd, yd, thd = velocities((x, y, th))
+    _, yd, thd = velocities((x, y, th))
     m, I, R = sp.symbols("m I R", positive=True)
     psi = shapes.disk_gap((x, y), R, shapes.Plane((0, 0), (1, 0)))
     wall = Wall(psi, restitution=1, impulsive_constraints=[yd + R * thd], name="wall", law=law)
@@ -58,7 +58,7 @@ def carnot_3_7() -> Scene:
     """Carnot paper, example 3.7: a disc (radius R, mass m, inertia m k^2) moving in a
     vertical plane hits the rough wall y = R; at impact ``x_dot - R theta_dot = 0``."""
     x, y, th = coordinates("x y theta")
-    xd, yd, thd = velocities((x, y, th))
+    xd, _, thd = velocities((x, y, th))
     m, k, R = sp.symbols("m k R", positive=True)
     alpha = sp.Symbol("alpha", nonnegative=True)
     wall = Wall(y - R, restitution=alpha, impulsive_constraints=[xd - R * thd], name="rough_wall")
@@ -112,7 +112,7 @@ def car() -> Scene:
     span{(cos theta, sin theta, kappa, 0), (0, 0, 0, 1)}, written as two constraints
     (no side slip; heading rate = curvature times speed)."""
     x, y, th, kap = coordinates("x y theta kappa")
-    xd, yd, thd, kd = velocities((x, y, th, kap))
+    xd, yd, thd, _ = velocities((x, y, th, kap))
     m, J, c = sp.symbols("m J c", positive=True)
     return Scene(
         (x, y, th, kap),

@@ -196,7 +196,7 @@ class Scene:
 
     # -- metric and energy ------------------------------------------------------------------
     def mass_matrix(self) -> sp.ImmutableMatrix:
-        """g (or M = S^T g S in a frame): the n x n metric in the velocity basis, ``T = 1/2 v^T M v``."""
+        """The n x n metric in the velocity basis (g, or S^T g S in a frame): T = 1/2 v^T M v."""
         return self._decl.metric
 
     def coordinate_metric(self) -> sp.ImmutableMatrix:
@@ -235,18 +235,20 @@ class Scene:
         )
 
     def commutation_coefficients(self) -> sp.ImmutableDenseNDimArray:
-        """c^m_kl of the frame, ``[u_k, u_l] = c^m_kl u_m``, Array ``[m, k, l]`` (zero in coordinates)."""
+        """c^m_kl of the frame, [u_k, u_l] = c^m_kl u_m, an Array [m, k, l] (0 in coordinates)."""
 
         def build() -> sp.ImmutableDenseNDimArray:
             n = self.n
             if self.frame is None:
                 return sp.ImmutableDenseNDimArray.zeros(n, n, n)
-            return sp.ImmutableDenseNDimArray(commutation_coefficients(self.frame, self.coordinates))
+            return sp.ImmutableDenseNDimArray(
+                commutation_coefficients(self.frame, self.coordinates)
+            )
 
         return self._cached(("commutation",), build)
 
     def connection_coefficients(self, simplify: Level = "full") -> sp.ImmutableDenseNDimArray:
-        """omega^m_ij with ``nabla_{u_i} u_j = omega^m_ij u_m``, Array ``[m, i, j]`` (slides 000)."""
+        """omega^m_ij with nabla_{u_i} u_j = omega^m_ij u_m, an Array [m, i, j] (slides 000)."""
         return self._cached(
             ("connection", simplify),
             lambda: connection_coefficients(
@@ -292,7 +294,7 @@ class Scene:
         )
 
     def projectors(self) -> tuple[sp.ImmutableMatrix, sp.ImmutableMatrix]:
-        """(P, Q): g-orthogonal projectors onto D and D^perp, ``Q = C_ab Z^a (x) mu^b`` (Carnot §2.2)."""
+        """(P, Q): g-orthogonal projectors onto D and D^perp; Q = C_ab Z^a (x) mu^b (Carnot 2.2)."""
 
         def build() -> tuple[sp.ImmutableMatrix, sp.ImmutableMatrix]:
             P, Q = projectors(self._decl.metric, self.constraint_matrix)

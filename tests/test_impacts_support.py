@@ -16,13 +16,8 @@ from symmech.impacts import kkt_post_velocity
 
 
 def impact_map(scene: sm.Scene, wall, law=None, **kwargs):
-    """``scene.impact_map(wall, law=law)``; extra keyword arguments go to
-    :func:`symmech.impacts.derive_impact_map` (e.g. ``wall_velocity``)."""
-    if kwargs or not hasattr(scene, "impact_map"):
-        from symmech.impacts import derive_impact_map
-
-        return derive_impact_map(scene.declaration, wall, law=law, **kwargs)
-    return scene.impact_map(wall, law=law)
+    """``scene.impact_map(wall, law=law, **kwargs)`` (e.g. ``wall_velocity=...``)."""
+    return scene.impact_map(wall, law=law, **kwargs)
 
 
 def wall_one_form(scene: sm.Scene, index: int) -> tuple[sp.Matrix, sp.Expr]:

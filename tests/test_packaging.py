@@ -59,10 +59,7 @@ def test_layers_import_only_to_their_left():
 
 
 def test_import_pulls_only_core_dependencies():
-    code = (
-        "import sys, symmech\n"
-        "print('\\n'.join(sorted({m.split('.')[0] for m in sys.modules})))"
-    )
+    code = "import sys, symmech\nprint('\\n'.join(sorted({m.split('.')[0] for m in sys.modules})))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     loaded = set(out.stdout.split())
     for heavy in ("scipy", "matplotlib", "symengine", "pytest", "hypothesis", "IPython"):
@@ -82,6 +79,8 @@ def test_wheel_ships_templates(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     assert "symmech/templates/README.md" in names
     assert "symmech/templates/__init__.py" in names
-    templates = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "templates").rglob("*.jinja"))
+    templates = sorted(
+        p.relative_to(ROOT).as_posix() for p in (ROOT / "templates").rglob("*.jinja")
+    )
     for t in templates:
         assert "symmech/" + t in names, f"{t} missing from the wheel"

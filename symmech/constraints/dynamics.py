@@ -37,7 +37,7 @@ def constraint_rate(
 
     ``q_dot`` is the coordinate velocity written in the velocity basis (``S v``).
     """
-    m, n = mu.shape
+    m = mu.rows
     vcol = sp.Matrix(v)
     out = sp.zeros(m, 1)
     for a, qa in enumerate(q):

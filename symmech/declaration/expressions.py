@@ -21,7 +21,9 @@ Everything else (attribute access, subscripts, lambdas, comprehensions, comparis
 boolean operators, conditional expressions, f-strings, ``:=``, starred arguments, keyword
 arguments, container literals, calls of any other name, ...) is refused with an
 :class:`~symmech.errors.ExpressionError` naming the field, the position (line and
-1-based column, in characters) and the offending text.
+1-based column, in characters) and the offending text.  The exception also carries them as
+attributes: ``field``, ``line`` (the file line when the caller gave ``line``, else the line
+within a multi-line text, else None), ``column`` and ``token`` (None when unknown).
 
 Resource limits (keyword arguments of :func:`parse_expression`; defaults below) keep a
 hostile string from exhausting time or memory:
@@ -550,7 +552,7 @@ class _Parser:
             # left to right, checking every partial result: sympy merges the numbers of a
             # product (sqrt(a)*sqrt(b) is sqrt(a*b)), and roots of big numbers are slow
             result = first
-            for op, right, value in operands:
+            for op, _, value in operands:
                 result = _PY_OPERATORS[type(op)](result, value)
                 self._check_numbers(node, result)
             return result

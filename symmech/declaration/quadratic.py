@@ -18,10 +18,16 @@ from __future__ import annotations
 
 from collections import Counter, defaultdict
 from collections.abc import Sequence
+from fractions import Fraction
 
 import sympy as sp
 
-__all__ = ["NotQuadraticError", "group_by_factor", "linear_coefficients", "metric_from_kinetic_energy"]
+__all__ = [
+    "NotQuadraticError",
+    "group_by_factor",
+    "linear_coefficients",
+    "metric_from_kinetic_energy",
+]
 
 
 class NotQuadraticError(ValueError):
@@ -42,13 +48,24 @@ def _has(expr: sp.Expr, vset: frozenset) -> bool:
 _Term = tuple[sp.Expr, tuple[sp.Expr, ...]]
 
 
+def _num(x: sp.Expr) -> Fraction | sp.Expr:
+    # exact rationals as Python Fractions: sympy Number arithmetic dominates otherwise
+    if x.is_Integer:
+        return int(x)
+    return Fraction(int(x.p), int(x.q)) if x.is_Rational else x
+
+
+def _int(x: Fraction | int | sp.Expr) -> Fraction | int | sp.Expr:
+    return int(x) if isinstance(x, Fraction) and x.denominator == 1 else x
+
+
 def _split(expr: sp.Expr) -> _Term:
     if expr.is_Mul:
         num = [f for f in expr.args if f.is_Number]
-        return sp.Mul(*num), tuple(f for f in expr.args if not f.is_Number)
+        return _num(sp.Mul(*num)), tuple(f for f in expr.args if not f.is_Number)
     if expr.is_Number:
-        return expr, ()
-    return sp.S.One, (expr,)
+        return _num(expr), ()
+    return 1, (expr,)
 
 
 def linear_coefficients(expr: sp.Expr, index: dict[sp.Symbol, int]) -> dict[int, list[_Term]]:
@@ -59,7 +76,7 @@ def linear_coefficients(expr: sp.Expr, index: dict[sp.Symbol, int]) -> dict[int,
     """
     vset = frozenset(index)
     if expr in index:
-        return {index[expr]: [(sp.S.One, ())]}
+        return {index[expr]: [(1, ())]}
     if expr.is_Add:
         out: dict[int, list[_Term]] = defaultdict(list)
         for arg in expr.args:
@@ -86,15 +103,18 @@ def _outer(
 ) -> None:
     """out += coef * (a b^T + b a^T), upper triangle only (i <= j)."""
     cn, cf = coef
+    single, double = _int(cn), _int(2 * cn)
     for i, ai in a.items():
         for j, bj in b.items():
             if i > j and a is b:
                 continue  # symmetric: (j, i) is added with the doubled factor below
             key = (i, j) if i <= j else (j, i)
-            mult = 2 if (i == j or a is b) else 1
+            c = double if (i == j or a is b) else single
+            target = out[key]
             for sn, sf in ai:
+                csn, csf = c * sn if sn != 1 else c, cf + sf
                 for un, uf in bj:
-                    out[key].append((mult * cn * sn * un, cf + sf + uf))
+                    target.append((csn * un if un != 1 else csn, csf + uf))
 
 
 def _hessian(expr: sp.Expr, index: dict[sp.Symbol, int], out: dict, coef: _Term) -> None:
@@ -112,7 +132,7 @@ def _hessian(expr: sp.Expr, index: dict[sp.Symbol, int], out: dict, coef: _Term)
     if expr.is_Mul:
         dep = [f for f in expr.args if _has(f, vset)]
         num, factors = _split(sp.Mul(*[f for f in expr.args if not _has(f, vset)]))
-        c = (coef[0] * num, coef[1] + factors)
+        c = (_int(coef[0] * num), coef[1] + factors)
         if len(dep) == 1:
             _hessian(dep[0], index, out, c)
             return
@@ -134,20 +154,28 @@ def group_by_factor(terms: Sequence[_Term], q: frozenset) -> sp.Expr:
     ``l1 l2 (m1 + m2) cos(q1) cos(q2)``: fewer operations, same value.
     """
     groups: dict[tuple, list[tuple[sp.Expr, list[sp.Expr]]]] = defaultdict(list)
+    depends: dict[sp.Expr, bool] = {}
+
+    def on_q(f: sp.Expr) -> bool:
+        hit = depends.get(f)
+        if hit is None:
+            hit = depends[f] = not q.isdisjoint(f.free_symbols)
+        return hit
+
     for num, factors in terms:
-        dep = tuple(sorted((f for f in factors if not q.isdisjoint(f.free_symbols)), key=hash))
-        groups[dep].append((num, [f for f in factors if q.isdisjoint(f.free_symbols)]))
-    return sp.Add(*[_common_factor_sum(items) * sp.Mul(*dep) for dep, items in groups.items()])
+        dep = tuple(sorted((f for f in factors if on_q(f)), key=hash))
+        groups[dep].append((num, [f for f in factors if not on_q(f)]))
+    return sp.Add(*[_common_factor_sum(items, dep) for dep, items in groups.items()])
 
 
-def _common_factor_sum(items: list[tuple[sp.Expr, list[sp.Expr]]]) -> sp.Expr:
+def _common_factor_sum(items: list[tuple[sp.Expr, list[sp.Expr]]], dep: tuple = ()) -> sp.Expr:
     """Sum of ``num * prod(factors)`` with the factors common to every item pulled out.
 
     ``m1*l1*l2 + m2*l1*l2`` -> ``l1*l2*(m1 + m2)`` (a cheap, multiset form of factor_terms).
     """
     if len(items) == 1:
         num, factors = items[0]
-        return num * sp.Mul(*factors)
+        return _times(num, [*factors, *dep])
     common = Counter(items[0][1])
     for _, factors in items[1:]:
         common &= Counter(factors)
@@ -157,8 +185,15 @@ def _common_factor_sum(items: list[tuple[sp.Expr, list[sp.Expr]]]) -> sp.Expr:
     for num, factors in items:
         left = Counter(factors)
         left.subtract(common)
-        rest.append(num * sp.Mul(*left.elements()))
-    return sp.Mul(*common.elements()) * sp.Add(*rest)
+        rest.append(_times(num, list(left.elements())))
+    return sp.Mul(*common.elements(), sp.Add(*rest), *dep)
+
+
+def _times(num: Fraction | sp.Expr, factors: list[sp.Expr]) -> sp.Expr:
+    if num == 1:
+        return sp.Mul(*factors)
+    coef = sp.Rational(num.numerator, num.denominator) if isinstance(num, Fraction) else num
+    return sp.Mul(coef, *factors)
 
 
 def metric_from_kinetic_energy(
@@ -170,7 +205,7 @@ def metric_from_kinetic_energy(
     """
     index = {s: i for i, s in enumerate(v)}
     out: dict[tuple[int, int], list[_Term]] = defaultdict(list)
-    _hessian(sp.sympify(T), index, out, (sp.S.One, ()))
+    _hessian(sp.sympify(T), index, out, (1, ()))
     n = len(v)
     qset = frozenset(q)
     G = sp.zeros(n, n)

@@ -195,7 +195,9 @@ def declare(
     try:
         q = tuple(coordinates)
     except TypeError:
-        raise SceneError(f"coordinates: expected a sequence of sympy Symbols, got {coordinates!r}") from None
+        raise SceneError(
+            f"coordinates: expected a sequence of sympy Symbols, got {coordinates!r}"
+        ) from None
     if not q:
         raise SceneError("coordinates: a scene needs at least one coordinate")
     bad = [c for c in q if not isinstance(c, sp.Symbol)]
@@ -250,7 +252,9 @@ def declare(
     else:
         # parameters found in sympy-valued inputs may be used by name in string inputs
         for value in (metric, kinetic_energy, potential, frame, *list(constraints or [])):
-            for s in getattr(sp.sympify(value) if isinstance(value, sp.Basic) else value, "free_symbols", ()):  # noqa: E501
+            for s in getattr(
+                sp.sympify(value) if isinstance(value, sp.Basic) else value, "free_symbols", ()
+            ):
                 table.setdefault(s.name, s)
 
     def expr(value: object, field: str) -> sp.Expr | None:
@@ -324,10 +328,18 @@ def declare(
         if psi is None:
             continue
         if not (psi.free_symbols & set(q)):
-            problems.add(f"{label}.psi = {_short(psi)} does not depend on the coordinates {list(q)}")
+            problems.add(
+                f"{label}.psi = {_short(psi)} does not depend on the coordinates {list(q)}"
+            )
         if psi.free_symbols & (set(qd) | set(v)):
-            problems.add(f"{label}.psi = {_short(psi)} contains velocities; psi is a function of (t, q)")
-        nu = sp.Matrix(len(nu_rows), n, [e for r in nu_rows for e in r]) if nu_rows else sp.zeros(0, n)
+            problems.add(
+                f"{label}.psi = {_short(psi)} contains velocities; psi is a function of (t, q)"
+            )
+        nu = (
+            sp.Matrix(len(nu_rows), n, [e for r in nu_rows for e in r])
+            if nu_rows
+            else sp.zeros(0, n)
+        )
         resolved.append((w, psi, nu))
     names = [w.name for w in wall_list if isinstance(w, Wall) and w.name]
     dup = sorted({x for x in names if names.count(x) > 1})
@@ -343,7 +355,7 @@ def declare(
     if S is not None:
         fields.append(("frame", S, q_set))
     fields.append(("constraints", mu, q_set))
-    for k, (w, psi, nu) in enumerate(resolved):
+    for k, (_, psi, nu) in enumerate(resolved):
         fields.append((f"walls[{k}].psi", psi, q_set | {TIME}))
         fields.append((f"walls[{k}].impulsive_constraints", nu, q_set | {TIME}))
     if parameters is None:
@@ -362,16 +374,20 @@ def declare(
         vel = sorted(str(s) for s in (syms & (qd_set | v_set)) - allowed)
         if vel:
             problems.add(
-                f"{field}: contains velocity symbols {vel}; only coordinates and parameters may appear"
+                f"{field}: contains velocity symbols {vel};"
+                " only coordinates and parameters may appear"
             )
         if TIME in syms and TIME not in allowed:
             problems.add(f"{field}: depends on time t; only the potential and walls may")
         unknown = sorted(str(s) for s in syms - allowed - p_set - qd_set - v_set - {TIME})
         if unknown:
-            problems.add(f"{field}: unknown symbols {unknown} (not coordinates or declared parameters)")
+            problems.add(
+                f"{field}: unknown symbols {unknown} (not coordinates or declared parameters)"
+            )
         # a symbol that looks like the velocity of a coordinate that does not exist
         ghost = sorted(
-            s.name for s in syms - allowed - qd_set - v_set
+            s.name
+            for s in syms - allowed - qd_set - v_set
             if s.name.endswith("dot") and s.name[:-3] and s not in q_set
         )
         if ghost and parameters is None:
@@ -381,7 +397,9 @@ def declare(
             )
         bad_fn = _non_smooth(e)
         if bad_fn:
-            problems.add(f"{field}: contains non-smooth functions {bad_fn}; symmech needs smooth expressions")
+            problems.add(
+                f"{field}: contains non-smooth functions {bad_fn}; symmech needs smooth expressions"
+            )
     problems.raise_if_any()
 
     # -- metric properties ----------------------------------------------------------------------
@@ -398,10 +416,15 @@ def declare(
             )
         else:
             _check_independent(mu, points, "constraints", problems)
-    for k, (w, psi, nu) in enumerate(resolved):
+    for k, (w, _, nu) in enumerate(resolved):
         label = f"walls[{k}]" + (f" ({w.name!r})" if w.name else "")
         if nu.rows:
-            _check_independent(mu.col_join(nu), points, f"{label}.impulsive_constraints (with the permanent constraints)", problems)
+            _check_independent(
+                mu.col_join(nu),
+                points,
+                f"{label}.impulsive_constraints (with the permanent constraints)",
+                problems,
+            )
     problems.raise_if_any()
 
     walls_out = tuple(
@@ -503,7 +526,9 @@ def _check_frame(S: sp.Matrix, points: list[dict], problems: _Problems) -> None:
         problems.add("frame: the matrix S (q_dot = S v) is singular at every sampled point")
 
 
-def _check_independent(rows: sp.Matrix, points: list[dict], label: str, problems: _Problems) -> None:
+def _check_independent(
+    rows: sp.Matrix, points: list[dict], label: str, problems: _Problems
+) -> None:
     m = rows.rows
     ranks = []
     for point in points:
@@ -511,7 +536,8 @@ def _check_independent(rows: sp.Matrix, points: list[dict], label: str, problems
         ranks.append(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(initial=0), 1e-300)))
     if max(ranks) < m:
         problems.add(
-            f"{label}: the one-forms are linearly dependent (rank {max(ranks)} < {m}) at every sampled point"
+            f"{label}: the one-forms are linearly dependent (rank {max(ranks)} < {m})"
+            " at every sampled point"
         )
 
 
@@ -520,8 +546,13 @@ def _raw_matrix(value: object, field: str) -> list[list[object]]:
     if isinstance(value, sp.MatrixBase):
         return [list(value.row(i)) for i in range(value.rows)]
     if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
-        raise SceneError(f"{field}: expected a square matrix (sympy Matrix or nested lists), got {value!r}")
-    rows = [list(r) if hasattr(r, "__iter__") and not isinstance(r, (str, bytes)) else None for r in value]
+        raise SceneError(
+            f"{field}: expected a square matrix (sympy Matrix or nested lists), got {value!r}"
+        )
+    rows = [
+        list(r) if hasattr(r, "__iter__") and not isinstance(r, (str, bytes)) else None
+        for r in value
+    ]
     if any(r is None for r in rows):
         raise SceneError(f"{field}: expected a matrix given as a list of rows, got {value!r}")
     if len({len(r) for r in rows}) > 1:
@@ -530,7 +561,11 @@ def _raw_matrix(value: object, field: str) -> list[list[object]]:
 
 
 def _fmt(point: Mapping) -> str:
-    return "{" + ", ".join(f"{k}={v}" for k, v in sorted(point.items(), key=lambda kv: str(kv[0]))) + "}"
+    return (
+        "{"
+        + ", ".join(f"{k}={v}" for k, v in sorted(point.items(), key=lambda kv: str(kv[0])))
+        + "}"
+    )
 
 
 def _constraint_row(c, v, field, expr, problems: _Problems) -> list[sp.Expr] | None:
@@ -569,4 +604,3 @@ def _constraint_row(c, v, field, expr, problems: _Problems) -> list[sp.Expr] | N
         )
         return None
     return row
-

@@ -120,7 +120,11 @@ class Wall:
         object.__setattr__(self, "law", law)
 
     def __repr__(self) -> str:
-        extra = f", impulsive_constraints={list(self.impulsive_constraints)}" if self.impulsive_constraints else ""
+        extra = (
+            f", impulsive_constraints={list(self.impulsive_constraints)}"
+            if self.impulsive_constraints
+            else ""
+        )
         nm = f", name={self.name!r}" if self.name else ""
         law = f", law={self.law!r}" if self.law != "newton" else ""
         return f"Wall({self.psi}, restitution={self.restitution}{extra}{nm}{law})"

@@ -122,7 +122,10 @@ def connection_first_kind(
     D = Derivative(q, frame)
     c = None if frame is None else commutation
     return sp.ImmutableDenseNDimArray(
-        [[[tidy(_lowered(G, D, c, k, i, j), level) for j in range(n)] for i in range(n)] for k in range(n)]
+        [
+            [[tidy(_lowered(G, D, c, k, i, j), level) for j in range(n)] for i in range(n)]
+            for k in range(n)
+        ]
     )
 
 
@@ -145,7 +148,10 @@ def connection_coefficients(
         [
             [
                 [
-                    tidy(sp.Add(*[Ginv[m, k] * low[k, i, j] for k in range(n) if Ginv[m, k] != 0]), level)
+                    tidy(
+                        sp.Add(*[Ginv[m, k] * low[k, i, j] for k in range(n) if Ginv[m, k] != 0]),
+                        level,
+                    )
                     for j in range(n)
                 ]
                 for i in range(n)
@@ -236,6 +242,6 @@ def _forcing_coordinates(
                     add(j, a, i, -d)
     rows = []
     for k in range(n):
-        terms = [sp.Add(*coefs) * v[i] * v[j] for (i, j), coefs in acc[k].items()]
+        terms = [sp.Mul(sp.Add(*coefs), v[i], v[j]) for (i, j), coefs in acc[k].items()]
         rows.append(tidy(sp.Add(*terms) - D(sp.sympify(V), k), level))
     return sp.Matrix(rows)

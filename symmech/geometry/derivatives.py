@@ -43,6 +43,8 @@ class Derivative:
     def partial(self, expr: sp.Expr, a: int) -> sp.Expr:
         """d expr / d q^a, zero without differentiating when q^a does not occur."""
         qa = self.q[a]
+        if expr is qa or expr == qa:
+            return sp.S.One
         if qa not in self.free_symbols(expr):
             return sp.S.Zero
         if expr.is_Add:
@@ -54,14 +56,16 @@ class Derivative:
             for k, f in enumerate(args):
                 if qa in self.free_symbols(f):
                     df = self.partial(f, a)
-                    if df != 0:
+                    if df is not sp.S.Zero:
                         out.append(sp.Mul(*args[:k], df, *args[k + 1 :]))
             return sp.Add(*out)
         if expr.is_Pow and qa not in self.free_symbols(expr.exp):
             db = self.partial(expr.base, a)
             return expr.exp * expr.base ** (expr.exp - 1) * db
-        if isinstance(expr, sp.Function) and len(expr.args) == 1 and not isinstance(
-            expr, sp.core.function.AppliedUndef
+        if (
+            isinstance(expr, sp.Function)
+            and len(expr.args) == 1
+            and not isinstance(expr, sp.core.function.AppliedUndef)
         ):
             # chain rule through the function's own derivative (no Derivative objects)
             outer = self._outer.get(expr)
