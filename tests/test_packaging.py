@@ -13,8 +13,23 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "symmech"
 
-# declaration -> geometry -> constraints -> impacts -> scene -> examples -> cli
-LAYERS = ["errors", "declaration", "geometry", "constraints", "impacts", "scene", "examples", "cli"]
+# declaration -> geometry -> constraints -> impacts -> scene -> examples/scene files ->
+# codegen -> simulate -> verify/bench -> cli
+LAYERS = [
+    "errors",
+    "declaration",
+    "geometry",
+    "constraints",
+    "impacts",
+    "scene",
+    "examples",
+    "scenefile",
+    "codegen",
+    "simulate",
+    "verify",
+    "bench",
+    "cli",
+]
 
 
 def _layer_of(module: str) -> int | None:

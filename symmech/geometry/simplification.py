@@ -6,9 +6,11 @@ and large systems never pay for a full ``sympy.simplify``:
 ``"none"``
     Return expressions as built.  Used for the scalable quantities (mass matrix, forcing).
 ``"light"`` (default for accelerations, projectors, impact maps)
-    ``sympy.cancel`` on expressions of at most ``LIGHT_MAX_OPS`` operations (clears nested
-    fractions such as those from a Gram inverse), then ``factor_terms``; larger expressions
-    are left as built.
+    ``sympy.cancel`` on rational expressions (no function applications such as sin, sqrt
+    of a non-symbol) of at most ``LIGHT_MAX_OPS`` operations, clearing nested fractions
+    such as those from a Gram inverse, then ``factor_terms``.  Expressions with functions
+    get ``factor_terms`` only: ``cancel`` treats every trigonometric term as a new
+    generator and can take minutes on a 3 x 3 trigonometric mass matrix.
 ``"full"`` (default for Christoffel symbols)
     ``sympy.simplify`` (which includes trigsimp) on expressions of at most
     ``FULL_MAX_OPS`` operations, else the light policy.
@@ -40,8 +42,20 @@ def tidy(expr: sp.Expr, level: Level = "light") -> sp.Expr:
     if level == "full" and ops <= FULL_MAX_OPS:
         return sp.simplify(expr)
     if ops <= LIGHT_MAX_OPS:
-        return sp.factor_terms(sp.cancel(expr))
+        if _is_rational_function(expr):
+            return sp.factor_terms(sp.cancel(expr))
+        return sp.factor_terms(expr)
     return expr
+
+
+def _is_rational_function(expr: sp.Expr) -> bool:
+    """True when expr is built from symbols and numbers by + - * / and integer powers."""
+    for node in sp.preorder_traversal(expr):
+        if isinstance(node, (sp.Function, sp.Derivative)):
+            return False
+        if node.is_Pow and not node.exp.is_Integer:
+            return False
+    return True
 
 
 def tidy_matrix(M: sp.MatrixBase, level: Level = "light") -> sp.Matrix:
