@@ -100,6 +100,9 @@ def main() -> None:
         f"{'n':>3} | {'symmech g,f [s]':>15} {'Gamma_1 [s]':>11} {'ops':>7} | "
         f"{'Kane [s]':>9} {'ops':>7} {'Kane/sm':>8} | {'Lagr. [s]':>9} {'ops':>7} {'Lagr/sm':>8}"
     )
+    # warm-up: imports and sympy's caches of trivial objects, for both routes
+    symmech_route(2)
+    kane_route(2)
     print(head)
     print("-" * len(head))
     for n in args.sizes:
