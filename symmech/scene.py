@@ -346,7 +346,7 @@ class Scene:
         def build() -> sp.ImmutableMatrix:
             M, f = self._decl.metric, self.forcing()
             if self.is_constrained:
-                lam = self.multipliers(simplify="none")
+                lam = self.multipliers(simplify=simplify)
                 acc = constrained_acceleration(M, f, self.constraint_matrix, lam, simplify)
             else:
                 acc = solve_spd(M, f, simplify)

@@ -62,7 +62,11 @@ def rot_z(a):
 
 def time_derivative(M: sp.MatrixBase, q, qdot) -> sp.Matrix:
     """dM/dt = sum_a dM/dq^a q_dot^a."""
-    return sp.Matrix(M.rows, M.cols, lambda i, j: sum(sp.diff(M[i, j], a) * b for a, b in zip(q, qdot)))
+
+    def entry(i, j):
+        return sum(sp.diff(M[i, j], a) * b for a, b in zip(q, qdot, strict=True))
+
+    return sp.Matrix(M.rows, M.cols, entry)
 
 
 # ---------------------------------------------------------------- rigid body (ZXZ angles)
@@ -212,6 +216,29 @@ def _cancel_zero(e):
     return sp.cancel(sp.together(e)) == 0
 
 
+_IDENTITY_RNG = random.Random(20261123)
+
+
+def _zero_at_rational_points(e, count=3):
+    """Exact identity test for a rational function of x, y, z (Schwartz-Zippel): evaluate
+    at random rational points in exact arithmetic.  A non-zero rational function of low
+    degree vanishes at a random point of a large grid with negligible probability, and a
+    symbolic ``cancel`` of these 5000-operation expressions takes minutes."""
+    e = sp.sympify(e)
+    syms = sorted(e.free_symbols, key=str)
+    for _ in range(count):
+        pt = {
+            s: sp.Rational(_IDENTITY_RNG.randint(-997, 997), _IDENTITY_RNG.randint(1, 89))
+            for s in syms
+        }
+        value = e.xreplace(pt)
+        if value is sp.nan or value.has(sp.zoo):  # a pole: draw again
+            continue
+        if value != 0:
+            return False
+    return True
+
+
 def test_polynomial_frame_connection_is_levi_civita():
     scene = sm.Scene(XYZ, metric=G_POLY, frame=S_POLY, quasi_velocities=V3)
     assert_levi_civita_connection(scene, simplify="none", check=_cancel_zero)
@@ -242,7 +269,7 @@ poly_spd = st.lists(small_polys, min_size=9, max_size=9).map(
 @given(unimodular_frames, poly_spd)
 def test_random_frame_connection_is_levi_civita(S, G):
     scene = sm.Scene(XYZ, metric=G, frame=S, quasi_velocities=V3)
-    assert_levi_civita_connection(scene, simplify="none", check=_cancel_zero)
+    assert_levi_civita_connection(scene, simplify="none", check=_zero_at_rational_points)
 
 
 # ---------------------------------------------------- frame vs coordinates equivalence
@@ -270,7 +297,10 @@ def assert_frame_matches_coordinates(coord_scene, frame_scene, points, exact=Tru
 
 def _rational_points(symbols, count, seed):
     rng = random.Random(seed)
-    return [{s: sp.Rational(rng.randint(-30, 30), rng.randint(1, 9)) for s in symbols} for _ in range(count)]
+    return [
+        {s: sp.Rational(rng.randint(-30, 30), rng.randint(1, 9)) for s in symbols}
+        for _ in range(count)
+    ]
 
 
 def test_polar_particle_frame_vs_coordinates():
@@ -281,7 +311,13 @@ def test_polar_particle_frame_vs_coordinates():
     m, k, a = sp.symbols("m k a", positive=True)
     V = k * r**2 / 2 + a * r**3 * sp.cos(th)
     coord = sm.Scene((r, th), metric=sp.diag(m, m * r**2), potential=V)
-    frame = sm.Scene((r, th), metric=sp.diag(m, m), frame=sp.diag(1, 1 / r), quasi_velocities=(vr, vt), potential=V)
+    frame = sm.Scene(
+        (r, th),
+        metric=sp.diag(m, m),
+        frame=sp.diag(1, 1 / r),
+        quasi_velocities=(vr, vt),
+        potential=V,
+    )
     # textbook: r'' = r th'^2 - V_r / m, th'' = -2 r' th' / r - V_th / (m r^2)
     acc = coord.acceleration()
     assert is_zero(acc[0] - (r * thd**2 - sp.diff(V, r) / m))
@@ -301,7 +337,11 @@ def test_polynomial_frame_vs_coordinates_exact():
     m = sp.Symbol("m", positive=True)
     coord = sm.Scene(XYZ, metric=m * g, potential=V)
     frame = sm.Scene(
-        XYZ, metric=(S_POLY.T * m * g * S_POLY).applyfunc(sp.expand), frame=S_POLY, quasi_velocities=V3, potential=V
+        XYZ,
+        metric=(S_POLY.T * m * g * S_POLY).applyfunc(sp.expand),
+        frame=S_POLY,
+        quasi_velocities=V3,
+        potential=V,
     )
     pts = _rational_points([X, Y, Z, m, *V3, *sm.velocities(XYZ)], 3, seed=7)
     for p in pts:
@@ -360,7 +400,7 @@ def _sphere():
 
 
 def test_sphere_christoffel_and_first_kind_consistency():
-    scene, th, ph, a = _sphere()
+    scene, th, _ph, a = _sphere()
     G2 = scene.christoffel(kind=2)
     expected = {
         (0, 1, 1): -sp.sin(th) * sp.cos(th),
@@ -379,7 +419,7 @@ def test_sphere_christoffel_and_first_kind_consistency():
 
 
 def test_sphere_geodesic_equation():
-    scene, th, ph, a = _sphere()
+    scene, th, _ph, a = _sphere()
     thd, phd = scene.velocities
     acc = scene.acceleration()
     # theta'' = sin cos phi'^2, phi'' = -2 cot(theta) theta' phi'
@@ -410,7 +450,10 @@ def christoffel_direct(g: sp.Matrix, q, point) -> list:
 
 QS = sm.coordinates("p q s")
 small_qpoly = st.lists(
-    st.tuples(st.integers(-2, 2), st.sampled_from([QS[0], QS[1], QS[2], QS[0] * QS[1], QS[2] ** 2, sp.S.One])),
+    st.tuples(
+        st.integers(-2, 2),
+        st.sampled_from([QS[0], QS[1], QS[2], QS[0] * QS[1], QS[2] ** 2, sp.S.One]),
+    ),
     max_size=2,
 ).map(lambda terms: sp.Add(*[c * m for c, m in terms]))
 
@@ -431,13 +474,15 @@ def test_christoffel_random_metrics_against_direct_formula(nm, rnd):
     G2 = scene.christoffel(kind=2, simplify="light")
     G1 = scene.christoffel(kind=1, simplify="light")
     for _ in range(2):
-        pt = {s: sp.Rational(rnd.randint(-7, 7), rnd.randint(1, 4)) for s in q}
+        # every symbol of g gets a rational value (for n = 2 the metric may still contain
+        # the third symbol s, which is then a parameter), so both sides are exact rationals
+        pt = {s: sp.Rational(rnd.randint(-7, 7), rnd.randint(1, 4)) for s in QS}
         direct = christoffel_direct(g, q, pt)
         gp = g.subs(pt)
         for k, i, j in itertools.product(range(n), repeat=3):
-            assert G2[k, i, j].subs(pt) == direct[k][i][j], (k, i, j)
+            assert G2[k, i, j].xreplace(pt) == direct[k][i][j], (k, i, j)
             low = sum(gp[k, l] * direct[l][i][j] for l in range(n))
-            assert G1[k, i, j].subs(pt) == low, (k, i, j)
+            assert G1[k, i, j].xreplace(pt) == low, (k, i, j)
 
 
 # ---------------------------------------------------- Euler-Lagrange (double pendulum)
@@ -452,14 +497,17 @@ def test_double_pendulum_matches_euler_lagrange():
     qs, qds = (q1, q2), (q1d, q2d)
 
     def dt(e):  # velocity of a position
-        return sum(sp.diff(e, a) * b for a, b in zip(qs, qds))
+        return sum(sp.diff(e, a) * b for a, b in zip(qs, qds, strict=False))
 
     T = m1 * (dt(x1) ** 2 + dt(y1) ** 2) / 2 + m2 * (dt(x2) ** 2 + dt(y2) ** 2) / 2
     V = m1 * g * y1 + m2 * g * y2
     scene = sm.Scene(qs, kinetic_energy=T, potential=V)
     # textbook mass matrix of the double pendulum
     Mtext = sp.Matrix(
-        [[(m1 + m2) * l1**2, m2 * l1 * l2 * sp.cos(q1 - q2)], [m2 * l1 * l2 * sp.cos(q1 - q2), m2 * l2**2]]
+        [
+            [(m1 + m2) * l1**2, m2 * l1 * l2 * sp.cos(q1 - q2)],
+            [m2 * l1 * l2 * sp.cos(q1 - q2), m2 * l2**2],
+        ]
     )
     assert all_zero(scene.mass_matrix() - Mtext)
     # Euler-Lagrange residual with q_ddot symbols, computed directly
@@ -468,7 +516,9 @@ def test_double_pendulum_matches_euler_lagrange():
     EL = []
     for k in range(2):
         p = sp.diff(L, qds[k])
-        dp = sum(sp.diff(p, a) * b for a, b in zip(qs, qds)) + sum(sp.diff(p, a) * b for a, b in zip(qds, qdd))
+        dp = sum(sp.diff(p, a) * b for a, b in zip(qs, qds, strict=False)) + sum(
+            sp.diff(p, a) * b for a, b in zip(qds, qdd, strict=False)
+        )
         EL.append(dp - sp.diff(L, qs[k]))
     res = scene.mass_matrix() * sp.Matrix(qdd) - scene.forcing()
     for k in range(2):

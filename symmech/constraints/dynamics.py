@@ -57,12 +57,17 @@ def multipliers(
     rate: sp.MatrixBase,
     level: Level = "light",
 ) -> sp.Matrix:
-    """lambda = C^{-1} (-mu_dot v - mu M^{-1} f) (see the module docstring)."""
-    Minv_muT = solve_spd(M, mu.T, "none")
-    Minv_f = solve_spd(M, f, "none")
-    C = mu * Minv_muT
-    rhs = -rate - mu * Minv_f
-    return tidy_matrix(solve_spd(C, rhs, "none"), level)
+    """lambda = C^{-1} (-mu_dot v - mu M^{-1} f) (see the module docstring).
+
+    With a simplification level the solves run in the fraction field of the entries
+    (:func:`~symmech.constraints.projectors.solve_spd`), so intermediate results are
+    cancelled as they are formed.
+    """
+    Minv = solve_spd(M, mu.T.row_join(f), level)
+    m = mu.rows
+    C = mu * Minv[:, :m]
+    rhs = -rate - mu * Minv[:, m:]
+    return tidy_matrix(solve_spd(C, rhs, level), level)
 
 
 def constrained_acceleration(
@@ -74,4 +79,4 @@ def constrained_acceleration(
 ) -> sp.Matrix:
     """v_dot = M^{-1} (f + mu^T lambda) (Carnot eq. 5 in the velocity basis)."""
     rhs = f + mu.T * lam if mu.rows else f
-    return tidy_matrix(solve_spd(M, rhs, "none"), level)
+    return solve_spd(M, rhs, level)

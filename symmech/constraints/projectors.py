@@ -16,16 +16,25 @@ from __future__ import annotations
 
 import sympy as sp
 
+from symmech.geometry.field import field_solve
 from symmech.geometry.simplification import Level, tidy_matrix
 
 __all__ = ["gradients", "gram", "projectors", "solve_spd"]
 
 
 def solve_spd(A: sp.MatrixBase, B: sp.MatrixBase, level: Level = "light") -> sp.Matrix:
-    """Solve ``A X = B`` for a symmetric positive definite A (LU; diagonal A divided directly)."""
+    """Solve ``A X = B`` for a symmetric positive definite A.
+
+    A diagonal A is divided directly.  With a simplification level other than ``"none"``
+    the solve runs in the fraction field of the entries (:func:`symmech.geometry.field.
+    field_solve`: cancelled fractions, no nested LU quotients); otherwise, or when no such
+    field exists, by symbolic LU.
+    """
     if A.is_diagonal():
         X = sp.Matrix(B.rows, B.cols, lambda i, j: B[i, j] / A[i, i])
-    else:
+        return tidy_matrix(X, level)
+    X = field_solve(A, B) if level != "none" else None
+    if X is None:
         X = A.LUsolve(B)
     return tidy_matrix(X, level)
 

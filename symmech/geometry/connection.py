@@ -29,7 +29,8 @@ from collections.abc import Sequence
 import sympy as sp
 
 from symmech.geometry.derivatives import Derivative
-from symmech.geometry.simplification import Level, tidy, tidy_matrix
+from symmech.geometry.field import field_solve
+from symmech.geometry.simplification import Level, tidy
 
 __all__ = [
     "christoffel_first_kind",
@@ -80,10 +81,24 @@ def christoffel_first_kind(
     return sp.ImmutableDenseNDimArray(out)
 
 
-def _inverse(g: sp.MatrixBase, level: Level) -> sp.Matrix:
+def _raise_index(g: sp.MatrixBase, lowered: list[list[list[sp.Expr]]], level: Level) -> list:
+    """``out[m][i][j] = g^mk lowered[k][i][j]`` (an n x n x n nested list).
+
+    A diagonal g is divided directly.  Otherwise, with a simplification level, the solve
+    ``g X = F`` runs in the fraction field of the entries (:mod:`symmech.geometry.field`),
+    which returns cancelled fractions directly (a symbolic LU inverse followed by
+    ``cancel`` takes minutes on a 3 x 3 polynomial metric); without one, or when the
+    entries admit no field, a symbolic LU solve is used.
+    """
+    n = g.rows
+    F = sp.Matrix(n, n * n, lambda k, ij: lowered[k][ij // n][ij % n])
     if g.is_diagonal():
-        return sp.diag(*[1 / g[i, i] for i in range(g.rows)])
-    return tidy_matrix(g.inv(method="LU"), level)
+        X = sp.Matrix(n, n * n, lambda k, ij: F[k, ij] / g[k, k])
+    else:
+        X = field_solve(g, F) if level != "none" else None
+        if X is None:
+            X = g.LUsolve(F)
+    return [[[tidy(X[m, i * n + j], level) for j in range(n)] for i in range(n)] for m in range(n)]
 
 
 def christoffel_second_kind(
@@ -96,14 +111,8 @@ def christoffel_second_kind(
     """
     n = len(q)
     first = christoffel_first_kind(g, q, level="none")
-    ginv = _inverse(g, level)
-    out = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(n)]
-    for i in range(n):
-        for j in range(i, n):
-            for k in range(n):
-                val = sp.Add(*[ginv[k, l] * first[l, i, j] for l in range(n) if ginv[k, l] != 0])
-                out[k][i][j] = out[k][j][i] = tidy(val, level)
-    return sp.ImmutableDenseNDimArray(out)
+    lowered = [[[first[k, i, j] for j in range(n)] for i in range(n)] for k in range(n)]
+    return sp.ImmutableDenseNDimArray(_raise_index(sp.Matrix(g), lowered, level))
 
 
 def connection_first_kind(
@@ -143,22 +152,8 @@ def connection_coefficients(
     """
     n = len(q)
     low = connection_first_kind(G, q, frame, commutation, level="none")
-    Ginv = _inverse(G, level)
-    return sp.ImmutableDenseNDimArray(
-        [
-            [
-                [
-                    tidy(
-                        sp.Add(*[Ginv[m, k] * low[k, i, j] for k in range(n) if Ginv[m, k] != 0]),
-                        level,
-                    )
-                    for j in range(n)
-                ]
-                for i in range(n)
-            ]
-            for m in range(n)
-        ]
-    )
+    lowered = [[[low[k, i, j] for j in range(n)] for i in range(n)] for k in range(n)]
+    return sp.ImmutableDenseNDimArray(_raise_index(sp.Matrix(G), lowered, level))
 
 
 def forcing(
