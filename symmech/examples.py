@@ -24,6 +24,7 @@ __all__ = [
     "carnot_4_4",
     "example",
     "pendulum_on_cart",
+    "rolling_ball",
     "spinning_disk",
 ]
 
@@ -107,6 +108,40 @@ def carnot_4_4() -> Scene:
     return _rolling_sphere(sp.Symbol("x", real=True) - f(t), "carnot_4_4")
 
 
+def rolling_ball() -> Scene:
+    """Slides 000, "Example: rolling ball": the orientation of a ball (radius r, mass 1,
+    inertia k^2 about every axis) rolling on a horizontal plane without spinning about the
+    vertical.  Its admissible angular velocities are the slides' distribution
+    ``A_R = span{[e1 x] R, [e2 x] R}``: omega_z = 0.  Coordinates are the Euler angles
+    (phi, theta, psi) and the quasi-velocities the angular velocities (omega_x, omega_y,
+    omega_z) of Carnot paper ex. 3.13.  Rolling fixes the centre's velocity to
+    ``r (omega_y, -omega_x, 0)``, so the kinetic energy reduced to SO(3) is
+    ``T = 1/2 (k^2 + r^2) (omega_x^2 + omega_y^2) + 1/2 k^2 omega_z^2``."""
+    phi, theta, psi_ang = coordinates("phi theta psi")
+    wx, wy, wz = sp.symbols("omega_x omega_y omega_z", real=True)
+    k, r = sp.symbols("k r", positive=True)
+    # q_dot = S omega with S = B^-1, B of Carnot paper ex. 3.13 (see _rolling_sphere)
+    S = sp.Matrix(
+        [
+            [sp.sin(psi_ang) / sp.sin(theta), -sp.cos(psi_ang) / sp.sin(theta), 0],
+            [sp.cos(psi_ang), sp.sin(psi_ang), 0],
+            [
+                -sp.sin(psi_ang) * sp.cos(theta) / sp.sin(theta),
+                sp.cos(psi_ang) * sp.cos(theta) / sp.sin(theta),
+                1,
+            ],
+        ]
+    )
+    return Scene(
+        (phi, theta, psi_ang),
+        metric=sp.diag(k**2 + r**2, k**2 + r**2, k**2),
+        constraints=[wz],
+        frame=S,
+        quasi_velocities=(wx, wy, wz),
+        name="rolling_ball",
+    )
+
+
 def car() -> Scene:
     """Slides 000, "Driving a car": (x, y, theta, kappa) with the admissible directions
     span{(cos theta, sin theta, kappa, 0), (0, 0, 0, 1)}, written as two constraints
@@ -154,6 +189,7 @@ EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {
     "carnot_3_7": (carnot_3_7, "Carnot paper ex. 3.7: disc hits a rough wall"),
     "carnot_3_13": (carnot_3_13, "Carnot paper ex. 3.13: rolling sphere hits a rough wall"),
     "carnot_4_4": (carnot_4_4, "Carnot paper ex. 4.4: rolling sphere hits a moving wall"),
+    "rolling_ball": (rolling_ball, "slides 000: ball rolling without spinning (SO(3))"),
     "car": (car, "slides 000: car with curvature state (non-holonomic)"),
     "pendulum_on_cart_3": (lambda: pendulum_on_cart(3), "3-link pendulum on a cart"),
 }

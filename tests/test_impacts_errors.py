@@ -17,7 +17,10 @@ m, R = sp.symbols("m R", positive=True)
 
 def test_wall_gradient_in_the_span_of_the_constraints():
     scene = sm.Scene((x, y), metric=sp.eye(2), constraints=[xd], walls=[sm.Wall(x, name="w")])
-    with pytest.raises(sm.ImpactError, match=r"gradient of psi = x lies in the span of the permanent constraints \['xdot'\]"):
+    with pytest.raises(
+        sm.ImpactError,
+        match=r"gradient of psi = x lies in the span of the permanent constraints \['xdot'\]",
+    ):
         impact_map(scene, "w")
 
 
@@ -38,7 +41,7 @@ def test_impulsive_constraint_dependent_on_the_wall():
 
 def test_impulsive_constraint_dependent_on_the_permanent_constraints():
     """Caught when the scene is declared (symmech.declaration.spec)."""
-    with pytest.raises(sm.SceneError, match="impulsive_constraints .*linearly dependent"):
+    with pytest.raises(sm.SceneError, match=r"impulsive_constraints .*linearly dependent"):
         sm.Scene(
             (x, y, th),
             metric=sp.eye(3),

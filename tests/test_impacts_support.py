@@ -69,14 +69,16 @@ def test_kkt_route_reproduces_a_hand_computed_bounce():
     """A point mass m bouncing on y = 0 with restitution 1/2: v+ = (vx, -vy/2)."""
     x, y = sm.coordinates("x y")
     m = sp.Symbol("m", positive=True)
-    scene = sm.Scene((x, y), metric=sp.diag(m, m), walls=[sm.Wall(y, restitution=sp.Rational(1, 2))])
+    scene = sm.Scene(
+        (x, y), metric=sp.diag(m, m), walls=[sm.Wall(y, restitution=sp.Rational(1, 2))]
+    )
     vx, vy = sp.symbols("vx vy", real=True)
     assert kkt(scene, 0, [vx, vy]) == sp.Matrix([vx, -vy / 2])
 
 
 def test_basis_of_D_spans_the_constraint_kernel():
     x, y, th = sm.coordinates("x y theta")
-    xd, yd, thd = sm.velocities((x, y, th))
+    xd, _yd, thd = sm.velocities((x, y, th))
     R = sp.Symbol("R", positive=True)
     scene = sm.Scene((x, y, th), metric=sp.eye(3), constraints=[xd - R * thd])
     B = basis_of_D(scene)

@@ -37,7 +37,7 @@ def ellipse(restitution=1):
 def test_bouncing_ellipse_map_C_and_Phi():
     """x+ = x- - 2C/m, y+ = y-, th+ = th- - 2 C Phi / I, C = (xd + Phi thd)/(1/m + Phi^2/I)
     with Phi = dh/dtheta, h = x + (distance to the contact point)."""
-    scene, (x, y, th), (xd, yd, thd) = ellipse()
+    scene, (x, _y, th), (xd, yd, thd) = ellipse()
     imp = impact_map(scene, "wall")
     h = x + sp.sqrt(a**2 * sp.cos(th) ** 2 + b**2 * sp.sin(th) ** 2)  # text's h, |theta| < pi/2
     Phi = sp.diff(h, th)
@@ -50,7 +50,7 @@ def test_bouncing_ellipse_map_C_and_Phi():
 
 def test_bouncing_ellipse_with_the_printed_Phi():
     """Numerically, with text 001's printed five-term Phi, for |theta| < pi/2."""
-    scene, (x, y, th), (xd, yd, thd) = ellipse()
+    scene, (_x, _y, th), (xd, yd, thd) = ellipse()
     imp = impact_map(scene, 0)
     tau, sec = sp.tan(th), sp.sec(th)
     s = sp.sqrt(b**2 * tau**2 / a**2 + 1)
@@ -121,7 +121,7 @@ def test_spinning_disk_energy_law_general_formula():
 
 
 def test_spinning_disk_special_cases():
-    scene, (xd, yd, thd) = disk()
+    scene, (_xd, _yd, _thd) = disk()
     imp = impact_map(scene, 0)
     x0, th0 = sp.symbols("x0 th0", positive=True)
     # q0 = (x0, 0, 0): x1 = -x0
@@ -138,7 +138,7 @@ def test_spinning_disk_special_cases():
 
 def test_spinning_disk_perfectly_inelastic():
     """alpha = 0: the x velocity is absorbed, (y, th) projected onto the rolling constraint."""
-    scene, (xd, yd, thd) = disk(restitution=0)
+    scene, (_xd, yd, thd) = disk(restitution=0)
     imp = impact_map(scene, 0)
     beta = (I * thd - m * R * yd) / (I + m * R**2)
     expected = sp.Matrix([0, -R * beta, beta])
@@ -157,7 +157,9 @@ def test_energy_law_against_the_kkt_route():
     energy = sp.expand((vp.T * g * vp)[0, 0] - (sp.Matrix(v).T * g * sp.Matrix(v))[0, 0])
     point = {v[0]: sp.Rational(3, 2), v[1]: -2, v[2]: 5, m: 2, I: sp.Rational(1, 3), R: 3}
     (root,) = [s for s in sp.solve(energy.subs(point), lam) if s.is_nonnegative]
-    assert sp.simplify(imp.apply(point).subs(point) - vp.subs(point).subs(lam, root)) == sp.zeros(3, 1)
+    assert sp.simplify(imp.apply(point).subs(point) - vp.subs(point).subs(lam, root)) == sp.zeros(
+        3, 1
+    )
 
 
 def test_energy_law_has_no_matrix_and_no_carnot():
@@ -175,7 +177,7 @@ def test_energy_law_has_no_matrix_and_no_carnot():
 
 def test_both_laws_on_the_same_scene():
     """Newton (Prop. 3.4) loses T_C at alpha = 1 (Theorem 3.11); the energy law conserves."""
-    scene, v = disk()
+    scene, _v = disk()
     newton = impact_map(scene, 0, law="newton")
     energy = impact_map(scene, 0, law="energy")
     assert newton.is_linear and not energy.is_linear
@@ -213,6 +215,7 @@ def test_rebound_coefficient_is_stable_in_float64():
                 assert abs(text(mv, Iv, Rv) - exact) / exact > lost[Rv]
             # x1 for a disk that only spins: -sqrt(coeff) th0
             th0 = 3.0
-            assert abs(x1(0.0, 0.0, th0, mv, Iv, Rv) + mp.sqrt(exact) * th0) / (
-                mp.sqrt(exact) * th0
-            ) < 1e-14
+            assert (
+                abs(x1(0.0, 0.0, th0, mv, Iv, Rv) + mp.sqrt(exact) * th0) / (mp.sqrt(exact) * th0)
+                < 1e-14
+            )

@@ -35,8 +35,12 @@ def brute_force_gap(cx, cy, th, sa, sb, p, n) -> float:
     grid = np.linspace(0.0, 2 * math.pi, 2001)
     values = [gap(g) for g in grid]
     i = int(np.argmin(values))
-    res = minimize_scalar(gap, bounds=(grid[max(i - 1, 0)], grid[min(i + 1, 2000)]), method="bounded",
-                          options={"xatol": 1e-12})
+    res = minimize_scalar(
+        gap,
+        bounds=(grid[max(i - 1, 0)], grid[min(i + 1, 2000)]),
+        method="bounded",
+        options={"xatol": 1e-12},
+    )
     return min(res.fun, values[i])
 
 
@@ -48,8 +52,26 @@ def text001_gap(cx, th, sa, sb):
 
 
 ORIENTATIONS = [
-    -3.0, -2.0, -1.6, -1.2, -0.5, 0.0, 0.3, 1.0, 1.5, 1.5707, 1.57079632, 1.5708, 1.6, 2.0,
-    2.5, 3.0, 3.1, 4.0, 5.5, 6.2,
+    -3.0,
+    -2.0,
+    -1.6,
+    -1.2,
+    -0.5,
+    0.0,
+    0.3,
+    1.0,
+    1.5,
+    1.5707,
+    1.57079632,
+    1.5708,
+    1.6,
+    2.0,
+    2.5,
+    3.0,
+    3.1,
+    4.0,
+    5.5,
+    6.2,
 ]
 NORMALS = [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.6, 0.8), (-0.28, 0.96)]
 
@@ -146,7 +168,12 @@ def test_support_function_route_is_accurate_near_pi_over_2():
 def test_disk_and_sphere_gaps():
     assert shapes.disk_gap((x, y), 2) == y - 2
     n = (sp.Rational(3, 5), sp.Rational(4, 5))
-    assert sp.expand(shapes.disk_gap((x, y), A, Plane((1, 1), n)) - (3 * (x - 1) + 4 * (y - 1)) / 5 + A) == 0
+    assert (
+        sp.expand(
+            shapes.disk_gap((x, y), A, Plane((1, 1), n)) - (3 * (x - 1) + 4 * (y - 1)) / 5 + A
+        )
+        == 0
+    )
     z = sp.Symbol("z", real=True)
     assert shapes.sphere_gap((x, y, z), A) == z - A
     assert shapes.sphere_gap((x, y, z), A, Plane.axis("x", dim=3)) == x - A

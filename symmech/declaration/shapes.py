@@ -107,7 +107,9 @@ class Plane:
     def gap(self, X: Sequence) -> sp.Expr:
         """Signed distance ``n . (X - p)`` of a point X (positive on the free side)."""
         x = _vector(X, self.dim, "point")
-        return sp.Add(*[ni * (xi - pi) for ni, xi, pi in zip(self.normal, x, self.point, strict=True)])
+        return sp.Add(
+            *[ni * (xi - pi) for ni, xi, pi in zip(self.normal, x, self.point, strict=True)]
+        )
 
 
 def _plane(plane: Plane | None, dim: int) -> Plane:

@@ -46,6 +46,7 @@ from symmech.impacts.quadratic import Affine, QuadraticForm, common_domain
 
 __all__ = ["CarnotResult", "carnot_residual"]
 
+
 @dataclass(frozen=True)
 class CarnotResult:
     """The residual of the Carnot theorem that applies to an impact map.
@@ -100,10 +101,8 @@ def carnot_residual(
     zero = sp.zeros(n, 1)
     W = sp.Matrix(W)
     k_loss, k_c = (1 - a) / (1 + a), 2 * a / (1 + a)
-    ring = common_domain(
-        [proj.g, proj.P, proj.PP, proj.T, matrix, offset, W], [a, k_loss, k_c]
-    )
-    g, P, PP, Tt = (ring.matrix(M) for M in (proj.g, proj.P, proj.PP, proj.T))
+    ring = common_domain([proj.g, proj.P, proj.PP, proj.T, matrix, offset, W], [a, k_loss, k_c])
+    g, PP, Tt = (ring.matrix(M) for M in (proj.g, proj.PP, proj.T))
     # the pre-impact velocity x = L v + o: the general element of D (or of the restriction)
     x = Affine.of(ring, sp.Matrix(proj.P), zero)
     if restrict:

@@ -126,9 +126,11 @@ def check_regular(
         return
     for j in range(1, k):
         if all(r[j] < j + 1 for r in ranks):
-            symbolic = sp.simplify(C[: j + 1, : j + 1].det()) if sp.count_ops(
-                C[: j + 1, : j + 1]
-            ) <= _SYMBOLIC_OPS else None
+            symbolic = (
+                sp.simplify(C[: j + 1, : j + 1].det())
+                if sp.count_ops(C[: j + 1, : j + 1]) <= _SYMBOLIC_OPS
+                else None
+            )
             if symbolic is not None and symbolic.is_number and symbolic != 0:
                 continue
             raise ImpactError(

@@ -43,7 +43,7 @@ import sympy as sp
 
 from symmech.geometry.simplification import Level, tidy_matrix
 from symmech.impacts.projectors import ImpactProjectors
-from symmech.impacts.stability import stable_coefficient, stable_linear
+from symmech.impacts.stability import stable_coefficient
 
 __all__ = ["EnergyLaw", "energy_law"]
 
@@ -83,40 +83,44 @@ def energy_law(
     """
     n = proj.g.rows
     v = sp.Matrix(velocities)
-    x = v - sp.Matrix(W)
+    W = sp.Matrix(W)
     k = proj.C.rows
     order = [*range(1, k), 0]
     Cp = sp.Matrix(proj.C).extract(order, order)
     if k == 1:
-        L, D = sp.eye(1), Cp
+        Linv, D = sp.eye(1), Cp
     else:
         L, D = Cp.LDLdecomposition(hermitian=False)
         L, D = tidy_matrix(L, level), tidy_matrix(D, level)
-    b = sp.Matrix(proj.beta).extract(order, list(range(n))) * x
-    y = tidy_matrix(L.LUsolve(b) if k > 1 else b, level)
+        Linv = tidy_matrix(L.LUsolve(sp.eye(k)), level)
+    # y = L^{-1} beta_p (v - W), written as Yrows v + ywall with separate coefficients
+    Yrows = tidy_matrix(Linv * sp.Matrix(proj.beta).extract(order, list(range(n))), level)
+    PP = sp.Matrix(proj.PP)
+    N = sp.Matrix(proj.N)
+    coeff = (lambda e: stable_coefficient(e, state)) if stable else (lambda e: e)
+    Yrows = Yrows.applyfunc(coeff)
+    ywall = (-Yrows * W).applyfunc(coeff)
+    PPs = PP.applyfunc(coeff)
+    uwall = (-PP * W).applyfunc(coeff)
+    Ns = N.applyfunc(coeff)
+
+    def affine(rows: sp.Matrix, const: sp.Matrix, i: int) -> sp.Expr:
+        return sp.Add(const[i], *[rows[i, j] * v[j] for j in range(n)])
+
+    y = [affine(Yrows, ywall, i) for i in range(k)]
     d0 = D[k - 1, k - 1]
-    squares: list[tuple[sp.Expr, sp.Expr]] = []
-    fix = (lambda e: stable_linear(e, velocities, state)) if stable else (lambda e: e)
-    squares.append((sp.S.One, fix(y[k - 1])))
+    squares: list[tuple[sp.Expr, sp.Expr]] = [(sp.S.One, y[k - 1])]
     for i in range(k - 1):
-        weight = d0 / D[i, i]
-        squares.append((stable_coefficient(weight, state) if stable else weight, fix(y[i])))
+        squares.append((coeff(d0 / D[i, i]), y[i]))
     speed2 = sp.Add(*[w * f**2 for w, f in squares])
     s = sp.sympify(alpha) * sp.sqrt(speed2)
-    u = sp.Matrix(proj.PP) * x
-    N = sp.Matrix(proj.N)
-    post = sp.Matrix(W) + u + s * N
-    if stable:
-        u = sp.Matrix([fix(e) for e in u])
-        post = sp.Matrix(
-            [fix(sp.Matrix(W)[i] + u[i]) + stable_coefficient(N[i], state) * s for i in range(n)]
-        )
-    else:
-        post = tidy_matrix(post, "none")
+    # u = PP (v - W) = PP v - PP W;  v+ = W + u + s N
+    u = sp.Matrix([affine(PPs, uwall, i) for i in range(n)])
+    post = sp.Matrix([W[i] + u[i] + Ns[i] * s for i in range(n)])
     im = sp.ImmutableMatrix
     return EnergyLaw(
         tangential=im(u),
-        direction=im(N),
+        direction=im(Ns),
         normal_speed=s,
         speed_squared=speed2,
         squares=tuple(squares),

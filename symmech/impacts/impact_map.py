@@ -300,7 +300,9 @@ def derive_impact_map(
     wall velocity that does not move with the wall.
     """
     if simplify not in ("none", "light", "full"):
-        raise ImpactError(f"impact map: simplify must be 'none', 'light' or 'full', got {simplify!r}")
+        raise ImpactError(
+            f"impact map: simplify must be 'none', 'light' or 'full', got {simplify!r}"
+        )
     rw = _resolve(declaration, wall)
     law = rw.law if law is None else law
     if law not in LAWS:
@@ -395,18 +397,27 @@ def derive_impact_map(
                 "g(grad psi, grad psi) = 0 in the default wall velocity",
             )
         )
-    if energy is not None:
-        structural.append(
-            (
-                energy.speed_squared,
-                "branch point of the square root in the energy law (grazing impact:"
-                " no normal relative velocity); v+ is not differentiable there",
-            )
-        )
-    closed = list(matrix) + list(offset) if law == "newton" else list(post)
+    if law == "newton":
+        closed = list(matrix) + list(offset)
+    else:
+        assert energy is not None
+        closed = [
+            *energy.tangential,
+            *energy.direction,
+            *[w for w, _ in energy.squares],
+            *W,
+        ]
     singularities = singular_set(
         structural, closed, "denominator of the closed form (derivatives of psi or the frame)"
     )
+    if energy is not None:
+        singularities.append(
+            Singularity(
+                energy.speed_squared,
+                "branch point of the square root in the energy law (grazing impact: no"
+                " normal relative velocity); v+ is continuous but not differentiable there",
+            )
+        )
     return ImpactMap(
         declaration=declaration,
         wall=rw,
