@@ -50,6 +50,14 @@ def test_package_list_names_every_subpackage():
     }
     assert found <= listed, f"sub-packages missing from pyproject.toml: {sorted(found - listed)}"
     assert "symmech.templates" in listed
+    # and the other way round: a listed package that does not exist breaks every install
+    mapped = config["tool"]["setuptools"].get("package-dir", {})
+    missing = [
+        name
+        for name in sorted(listed)
+        if not (ROOT / mapped.get(name, name.replace(".", "/")) / "__init__.py").is_file()
+    ]
+    assert not missing, f"pyproject.toml lists packages that do not exist: {missing}"
 
 
 def test_layers_import_only_to_their_left():
