@@ -1,0 +1,108 @@
+"""Backends: a backend is a config (template folder, templates to render, printer).
+
+Adding a backend is a recipe (SymForce style):
+
+1. a printer subclassing a sympy code printer, in :mod:`symmech.codegen.printers`;
+2. a template folder ``templates/<name>/`` with a module template and
+   ``function/FUNCTION.<ext>.jinja``, holding loops and conditionals only;
+3. a :class:`Backend` entry in :data:`BACKENDS` naming the templates and output files.
+
+Templates are rendered by a strict Jinja environment (``StrictUndefined``, ``trim_blocks``,
+``lstrip_blocks``, ``keep_trailing_newline``); every output file starts with a stamp naming
+its templates and saying it must not be edited.
+"""
+
+from __future__ import annotations
+
+import importlib.resources
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+
+import jinja2
+import sympy as sp
+
+from symmech.codegen.printers import SymmechCPrinter, SymmechNumPyPrinter
+
+__all__ = ["BACKENDS", "STEP_DOCS", "Backend", "environment", "template_root"]
+
+#: One-line descriptions of the linear-algebra steps, printed in function headers.
+STEP_DOCS = {
+    "spd_solve": "out = M^-1 f by a Cholesky factorisation of M",
+    "constrained_acceleration": (
+        "Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f),"
+        " out = M^-1 (f + mu^T lambda)"
+    ),
+    "constrained_multipliers": (
+        "Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f)"
+    ),
+    "impact_kkt": (
+        "the impulse-momentum system by Cholesky solves of M and of G = A M^-1 A^T:"
+        " out = v + M^-1 A^T G^-1 (b - A v)"
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Backend:
+    """A code-generation target.
+
+    ``templates`` are (template path, output file name pattern) pairs; the pattern is
+    formatted with ``stem`` (``symmech_<scene>``).  ``make_printer(names)`` returns the
+    expression printer for a name table.
+    """
+
+    name: str
+    templates: tuple[tuple[str, str], ...]
+    function_template: str
+    make_printer: Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer]
+    description: str
+
+    def template_dir(self) -> Path:
+        return template_root() / self.name
+
+    def templates_to_render(self, stem: str) -> list[tuple[str, str]]:
+        return [(t, pattern.format(stem=stem)) for t, pattern in self.templates]
+
+
+BACKENDS: dict[str, Backend] = {
+    "c": Backend(
+        name="c",
+        templates=(("c/header.h.jinja", "{stem}.h"), ("c/source.c.jinja", "{stem}.c")),
+        function_template="c/function/FUNCTION.c.jinja",
+        make_printer=SymmechCPrinter,
+        description="C99, compiled with the system compiler and loaded with ctypes",
+    ),
+    "numpy": Backend(
+        name="numpy",
+        templates=(("numpy/module.py.jinja", "{stem}.py"),),
+        function_template="numpy/function/FUNCTION.py.jinja",
+        make_printer=SymmechNumPyPrinter,
+        description="a NumPy module, vectorised over leading axes",
+    ),
+}
+
+
+def template_root() -> Path:
+    """The folder of the templates shipped as the package data ``symmech.templates``."""
+    root = importlib.resources.files("symmech.templates")
+    path = Path(str(root))
+    if not (path / "c").is_dir():
+        raise FileNotFoundError(
+            f"symmech templates not found in {path}; the installation is incomplete"
+        )
+    return path
+
+
+@cache
+def environment() -> jinja2.Environment:
+    """The strict Jinja environment over :func:`template_root`."""
+    return jinja2.Environment(
+        loader=jinja2.FileSystemLoader(str(template_root())),
+        undefined=jinja2.StrictUndefined,
+        trim_blocks=True,
+        lstrip_blocks=True,
+        keep_trailing_newline=True,
+        autoescape=False,
+    )

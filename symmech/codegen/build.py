@@ -1,0 +1,121 @@
+"""Compile generated C into a shared library, cached by content, and load it with ctypes.
+
+The cache key is a SHA-256 of the sources, the compiler's ``--version`` text and the
+flags, so a library is rebuilt exactly when one of them changes.  The cache folder is
+``$SYMMECH_CACHE_DIR``, else ``$XDG_CACHE_HOME/symmech``, else ``~/.cache/symmech``.
+Libraries are built in a private temporary folder and moved into place atomically, so
+concurrent builds of the same code do not collide.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+from collections.abc import Mapping, Sequence
+from functools import cache
+from pathlib import Path
+
+from symmech.errors import SymmechError
+
+__all__ = ["DEFAULT_FLAGS", "CompileError", "cache_dir", "compile_library", "find_compiler"]
+
+#: Flags for the loadable library: C99, optimised, position independent.  No
+#: -ffast-math: the generated code relies on IEEE semantics (isfinite, no reassociation).
+DEFAULT_FLAGS: tuple[str, ...] = ("-std=c99", "-O2", "-fPIC", "-shared")
+
+
+class CompileError(SymmechError, RuntimeError):
+    """The C compiler is missing or failed; the message holds its diagnostics."""
+
+
+def find_compiler(compiler: str | None = None) -> str:
+    """The C compiler to use: ``compiler``, else ``$CC``, else gcc, else cc."""
+    for candidate in (compiler, os.environ.get("CC"), "gcc", "cc"):
+        if candidate:
+            path = shutil.which(candidate)
+            if path:
+                return path
+    raise CompileError(
+        "no C compiler found (tried $CC, gcc, cc); install gcc or use target='numpy'"
+    )
+
+
+@cache
+def _compiler_identity(compiler: str) -> str:
+    try:
+        out = subprocess.run(
+            [compiler, "--version"], capture_output=True, text=True, timeout=60, check=False
+        )
+    except OSError as exc:
+        raise CompileError(f"cannot run the C compiler {compiler}: {exc}") from None
+    return out.stdout + out.stderr
+
+
+def cache_dir(path: str | Path | None = None) -> Path:
+    """The library cache folder (see the module docstring), created if needed."""
+    if path is None:
+        env = os.environ.get("SYMMECH_CACHE_DIR")
+        if env:
+            path = env
+        else:
+            base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+            path = Path(base) / "symmech"
+    folder = Path(path)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def compile_library(
+    sources: Mapping[str, str],
+    *,
+    compiler: str | None = None,
+    flags: Sequence[str] = DEFAULT_FLAGS,
+    cache: str | Path | None = None,
+) -> Path:
+    """Compile the ``.c`` files of ``sources`` (name -> text, headers included) into a
+    shared library and return its path, reusing a cached build with the same key."""
+    cc = find_compiler(compiler)
+    digest = hashlib.sha256()
+    for part in (_compiler_identity(cc), "\0".join(flags)):
+        digest.update(part.encode())
+    for name in sorted(sources):
+        digest.update(name.encode() + b"\0" + sources[name].encode() + b"\0")
+    key = digest.hexdigest()[:24]
+    folder = cache_dir(cache)
+    library = folder / f"symmech_{key}.so"
+    if library.is_file():
+        return library
+    with tempfile.TemporaryDirectory(prefix="build_", dir=folder) as tmp:
+        work = Path(tmp)
+        for name, text in sources.items():
+            (work / name).write_text(text, encoding="utf-8")
+        c_files = [name for name in sorted(sources) if name.endswith(".c")]
+        if not c_files:
+            raise CompileError("no .c file to compile")
+        target = work / library.name
+        cmd = [cc, *flags, "-o", str(target), *c_files, "-lm"]
+        try:
+            result = subprocess.run(
+                cmd, cwd=work, capture_output=True, text=True, timeout=600, check=False
+            )
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            raise CompileError(f"running {' '.join(cmd)} failed: {exc}") from None
+        if result.returncode != 0:
+            raise CompileError(
+                f"{' '.join(cmd)} failed with exit code {result.returncode}:\n"
+                + (result.stderr or result.stdout).strip()
+            )
+        os.replace(target, library)
+    return library
+
+
+def load_library(path: str | Path) -> ctypes.CDLL:
+    """Load a shared library built by :func:`compile_library`."""
+    try:
+        return ctypes.CDLL(str(path))
+    except OSError as exc:
+        raise CompileError(f"cannot load {path}: {exc}") from None

@@ -1,0 +1,376 @@
+"""A loaded generated module: the same Python API over the C library and the NumPy module.
+
+:class:`SceneModule` wraps the raw generated functions (ctypes calls into the compiled
+library, or the functions of the imported NumPy module) and gives both backends one API:
+
+>>> import symmech as sm, numpy as np
+>>> from symmech.examples import carnot_3_7
+>>> mod = sm.codegen.generate(carnot_3_7(), target="numpy").load()
+>>> mod.parameters
+('R', 'alpha', 'k', 'm')
+>>> mod.impact([0.0, 1.0, 0.0], [1.0, -2.0, 0.0], {"R": 1, "alpha": 0.5, "k": 1, "m": 2})
+array([0.5, 1. , 0.5])
+
+A state argument is an array of shape ``(n,)`` (one state) or ``(N, n)`` (a batch of N
+states; NumPy also accepts any leading shape); ``params`` is a sequence in the order of
+:attr:`SceneModule.parameters` or a mapping from their names; ``t`` and ``inputs`` (the
+values of the scene's arbitrary functions of time, :attr:`SceneModule.inputs`) are needed
+only by the functions that use them.  A failure at some state (a matrix that must be
+positive definite is not, or an output is not finite) raises :class:`NumericalError`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import importlib.util
+import sys
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from symmech.codegen.build import cache_dir, compile_library, load_library
+from symmech.codegen.lower import LoweredFunction
+from symmech.codegen.plan import CodegenError
+from symmech.errors import SymmechError
+
+if TYPE_CHECKING:
+    from symmech.codegen.generate import GeneratedCode
+
+__all__ = ["NumericalError", "SceneModule", "load_generated"]
+
+_STATUS = {1: "a matrix that must be positive definite is not", 2: "an output is not finite"}
+
+Raw = Callable[[tuple[np.ndarray, ...], Any, Any, Any], np.ndarray]
+
+
+class NumericalError(SymmechError, FloatingPointError):
+    """A generated function failed at a state (non-SPD matrix or non-finite output)."""
+
+
+class SceneModule:
+    """Generated functions of one scene (see the module docstring)."""
+
+    def __init__(self, code: GeneratedCode, raw: Mapping[str, Raw], path: Path):
+        self.code = code
+        self.backend = code.target
+        self.path = path
+        plan = code.plan
+        self.n = plan.n
+        self.m = plan.m
+        self.parameters = tuple(str(p) for p in plan.parameters)
+        self.inputs = tuple(str(a) for _, a in plan.inputs)
+        self.walls = plan.walls
+        self._raw = dict(raw)
+        self._spec = {f.name: f for f in code.functions}
+
+    @property
+    def functions(self) -> tuple[str, ...]:
+        """Names of the generated functions."""
+        return tuple(self._spec)
+
+    def __repr__(self) -> str:
+        return (
+            f"SceneModule({self.code.scene_name!r}, backend={self.backend!r},"
+            f" functions={list(self._spec)})"
+        )
+
+    # -- argument handling ----------------------------------------------------------------
+    def _params(self, params: object) -> np.ndarray | None:
+        k = len(self.parameters)
+        if k == 0:
+            if params is not None and len(np.atleast_1d(params)) != 0:
+                raise CodegenError(
+                    f"scene {self.code.scene_name!r} has no run-time parameters; got {params!r}"
+                )
+            return None
+        if params is None:
+            raise CodegenError(f"params required: {list(self.parameters)}")
+        if isinstance(params, Mapping):
+            values = {str(key): val for key, val in params.items()}
+            missing = [p for p in self.parameters if p not in values]
+            extra = sorted(set(values) - set(self.parameters))
+            if missing or extra:
+                raise CodegenError(
+                    f"params: missing {missing}, unknown {extra}; expected {list(self.parameters)}"
+                )
+            params = [values[p] for p in self.parameters]
+        p = np.asarray(params, dtype=np.float64)
+        if p.shape[-1:] != (k,):
+            raise CodegenError(
+                f"params: expected {k} values {list(self.parameters)}, got shape {p.shape}"
+            )
+        return p
+
+    def _state(self, value: object, size: int, what: str) -> np.ndarray:
+        a = np.asarray(value, dtype=np.float64)
+        if a.ndim == 0 or a.shape[-1] != size:
+            raise CodegenError(f"{what}: expected shape (..., {size}), got {a.shape}")
+        return a
+
+    def _call(self, name: str, state: Sequence[np.ndarray], params, t, inputs) -> np.ndarray:
+        spec = self._spec.get(name)
+        if spec is None:
+            reasons = [o for o in self.code.omitted if name.split("_")[0] in o]
+            raise CodegenError(
+                f"{name} was not generated for scene {self.code.scene_name!r}"
+                + (f" ({'; '.join(reasons)})" if reasons else "")
+            )
+        p = self._params(params)
+        if spec.takes_time and t is None:
+            raise CodegenError(f"{name} depends on time: pass t=")
+        u = None
+        if spec.takes_inputs:
+            if inputs is None:
+                raise CodegenError(f"{name} needs the inputs u = {list(self.inputs)}: pass inputs=")
+            u = self._state(inputs, len(self.inputs), "inputs")
+        tt = None if t is None or not spec.takes_time else np.asarray(t, dtype=np.float64)
+        return self._raw[name](tuple(state), p, tt, u)
+
+    # -- the API ----------------------------------------------------------------------------
+    def call(self, name: str, *state: object, params=None, t=None, inputs=None) -> np.ndarray:
+        """Call the generated function ``name`` with its state arrays (q, v, or y)."""
+        spec = self._spec.get(name)
+        sizes = [2 * self.n if s == "y" else self.n for s in (spec.state if spec else ())]
+        arrays = [
+            self._state(a, k, f"{name} argument {i}")
+            for i, (a, k) in enumerate(zip(state, sizes, strict=False))
+        ]
+        if spec is not None and len(arrays) != len(spec.state):
+            raise CodegenError(f"{name} takes {len(spec.state)} state arrays {spec.state}")
+        return self._call(name, arrays, params, t, inputs)
+
+    def mass_matrix(self, q, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """g(q) in the velocity basis, shape (..., n, n)."""
+        return self.call("mass_matrix", q, params=params, t=t, inputs=inputs)
+
+    def forcing(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """f(q, v, t) with g v_dot = f (unconstrained)."""
+        return self.call("forcing", q, v, params=params, t=t, inputs=inputs)
+
+    def acceleration(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """v_dot (constrained if the scene has constraints)."""
+        return self.call("acceleration", q, v, params=params, t=t, inputs=inputs)
+
+    def rhs(self, y, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """(q_dot, v_dot) for y = (q, v)."""
+        return self.call("rhs", y, params=params, t=t, inputs=inputs)
+
+    def energy(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """T + V."""
+        return self.call("energy", q, v, params=params, t=t, inputs=inputs)
+
+    def multipliers(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """The Lagrange multipliers lambda (constrained scenes)."""
+        return self.call("multipliers", q, v, params=params, t=t, inputs=inputs)
+
+    def constraint_residual(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+        """mu(q) v (constrained scenes)."""
+        return self.call("constraint_residual", q, v, params=params, t=t, inputs=inputs)
+
+    def projectors(self, q, params=None, *, t=None, inputs=None) -> tuple[np.ndarray, np.ndarray]:
+        """(P, Q), generated with ``projectors=True``."""
+        P = self.call("projector_P", q, params=params, t=t, inputs=inputs)
+        Q = self.call("projector_Q", q, params=params, t=t, inputs=inputs)
+        return P, Q
+
+    def _wall(self, wall: int | str) -> str:
+        if isinstance(wall, str):
+            if wall not in self.walls:
+                raise CodegenError(f"no wall named {wall!r}; walls are {list(self.walls)}")
+            return wall
+        if isinstance(wall, bool) or not isinstance(wall, int):
+            raise CodegenError(f"wall must be an index or a name, got {wall!r}")
+        if not -len(self.walls) <= wall < len(self.walls):
+            raise CodegenError(f"wall index {wall} out of range: {len(self.walls)} walls")
+        return self.walls[wall]
+
+    def psi(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+        """The gap psi(t, q) of a wall (admissible side psi >= 0)."""
+        return self.call(f"psi_{self._wall(wall)}", q, params=params, t=t, inputs=inputs)
+
+    def dpsi(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+        """d psi / d q of a wall (coordinates)."""
+        return self.call(f"dpsi_{self._wall(wall)}", q, params=params, t=t, inputs=inputs)
+
+    def psi_t(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+        """d psi / d t of a wall (zero for a static wall)."""
+        name = self._wall(wall)
+        if f"psi_t_{name}" not in self._spec:
+            q = np.asarray(q, dtype=np.float64)
+            return np.zeros(q.shape[:-1])
+        return self.call(f"psi_t_{name}", q, params=params, t=t, inputs=inputs)
+
+    def impact(self, q, v, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+        """The post-impact velocity v+ at a wall for the pre-impact velocity v."""
+        return self.call(f"impact_{self._wall(wall)}", q, v, params=params, t=t, inputs=inputs)
+
+
+# ---------------------------------------------------------------------------------------
+# backends
+
+
+def _failed(name: str, index: int | None, detail: str) -> NumericalError:
+    where = f" at state {index}" if index is not None else ""
+    return NumericalError(f"{name}{where}: {detail}")
+
+
+def _numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
+    shape_out = spec.out_shape
+
+    def call(state, p, t, u):
+        try:
+            with np.errstate(all="ignore"):
+                out = np.asarray(fn(*state, p, t, u), dtype=np.float64)
+        except np.linalg.LinAlgError:
+            raise _failed(spec.name, None, _STATUS[1]) from None
+        bad = ~np.isfinite(out)
+        if bad.any():
+            lead = out.shape[: out.ndim - len(shape_out)]
+            index = None
+            if lead:
+                flat = bad.reshape((-1, *shape_out)).reshape(int(np.prod(lead)), -1).any(axis=1)
+                index = int(np.argmax(flat))
+            raise _failed(spec.name, index, _STATUS[2])
+        return out
+
+    return call
+
+
+def _c_raw(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_inputs: int) -> Raw:
+    single = getattr(lib, prefix + spec.name)
+    batch = getattr(lib, prefix + spec.name + "_batch")
+    ptr, dbl = ctypes.c_void_p, ctypes.c_double
+    nstate = len(spec.state)
+    single.argtypes = (
+        [ptr] * nstate
+        + ([ptr] if spec.takes_parameters else [])
+        + ([dbl] if spec.takes_time else [])
+        + ([ptr] if spec.takes_inputs else [])
+        + [ptr]
+    )
+    single.restype = ctypes.c_int
+    batch.argtypes = (
+        [ctypes.c_long]
+        + [ptr] * nstate
+        + ([ptr] if spec.takes_parameters else [])
+        + ([ptr] if spec.takes_time else [])
+        + ([ptr] if spec.takes_inputs else [])
+        + [ptr]
+    )
+    batch.restype = ctypes.c_long
+    out_shape = spec.out_shape
+    out_size = spec.out_size
+    sizes = [2 * n if s == "y" else n for s in spec.state]
+
+    def call(state, p, t, u):
+        if p is not None and p.ndim != 1:
+            raise CodegenError(
+                f"{spec.name}: the C backend shares one parameter vector across a batch;"
+                f" got params of shape {p.shape}"
+            )
+        parts = [a.shape[:-1] for a in state]
+        if t is not None:
+            parts.append(t.shape)
+        if u is not None:
+            parts.append(u.shape[:-1])
+        lead = np.broadcast_shapes(*parts)
+        if lead == ():
+            arrays = [np.ascontiguousarray(a) for a in state]
+            args: list = [a.ctypes.data for a in arrays]
+            if spec.takes_parameters:
+                args.append(p.ctypes.data)
+            if spec.takes_time:
+                args.append(float(t))
+            if spec.takes_inputs:
+                uu = np.ascontiguousarray(u)
+                args.append(uu.ctypes.data)
+            out = np.empty(out_shape)
+            args.append(out.ctypes.data)
+            status = single(*args)
+            if status:
+                raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
+            return out
+        count = int(np.prod(lead))
+        arrays = [
+            np.ascontiguousarray(np.broadcast_to(a, (*lead, k)).reshape(count, k))
+            for a, k in zip(state, sizes, strict=True)
+        ]
+        args = [count, *[a.ctypes.data for a in arrays]]
+        keep = list(arrays)
+        if spec.takes_parameters:
+            args.append(p.ctypes.data)
+        if spec.takes_time:
+            tt = np.ascontiguousarray(np.broadcast_to(t, lead).reshape(count))
+            keep.append(tt)
+            args.append(tt.ctypes.data)
+        if spec.takes_inputs:
+            uu = np.ascontiguousarray(np.broadcast_to(u, (*lead, n_inputs)).reshape(count, -1))
+            keep.append(uu)
+            args.append(uu.ctypes.data)
+        out = np.empty((count, out_size))
+        args.append(out.ctypes.data)
+        first = batch(*args)
+        if first:
+            # re-run the failing state alone to learn why
+            i = first - 1
+            single_args = [a[i].ctypes.data for a in arrays]
+            if spec.takes_parameters:
+                single_args.append(p.ctypes.data)
+            if spec.takes_time:
+                single_args.append(float(tt[i]))
+            if spec.takes_inputs:
+                single_args.append(np.ascontiguousarray(uu[i]).ctypes.data)
+            scratch = np.empty(out_size)
+            single_args.append(scratch.ctypes.data)
+            status = single(*single_args)
+            raise _failed(spec.name, i, _STATUS.get(status, f"status {status}"))
+        return out.reshape((*lead, *out_shape))
+
+    return call
+
+
+def _import_numpy_module(code: GeneratedCode, folder: Path):
+    text = code.files[f"{code.stem}.py"]
+    key = hashlib.sha256(text.encode()).hexdigest()[:16]
+    path = folder / f"{code.stem}_{key}.py"
+    if not path.is_file():
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(text, encoding="utf-8")
+        tmp.replace(path)
+    name = f"_symmech_generated_{code.stem}_{key}"
+    if name in sys.modules:
+        return sys.modules[name], path
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    sys.modules[name] = module
+    return module, path
+
+
+def load_generated(
+    code: GeneratedCode,
+    *,
+    compiler: str | None = None,
+    flags: Sequence[str] | None = None,
+    cache: str | Path | None = None,
+) -> SceneModule:
+    """Build (C) or import (NumPy) ``code`` and wrap it in a :class:`SceneModule`."""
+    if code.target == "numpy":
+        module, path = _import_numpy_module(code, cache_dir(cache))
+        raw = {f.name: _numpy_raw(getattr(module, f.name), f) for f in code.functions}
+        return SceneModule(code, raw, path)
+    kwargs: dict[str, Any] = {"compiler": compiler, "cache": cache}
+    if flags is not None:
+        kwargs["flags"] = tuple(flags)
+    library = compile_library(dict(code.files), **kwargs)
+    lib = load_library(library)
+    prefix = f"{code.stem}_"
+    n_inputs = len(code.plan.inputs)
+    raw = {f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs) for f in code.functions}
+    module = SceneModule(code, raw, library)
+    module._library = lib  # keep the library alive as long as the module
+    return module

@@ -1,0 +1,594 @@
+"""What to generate for a scene: the symbolic plan of every function, backend-neutral.
+
+:func:`build_plan` turns a :class:`~symmech.Scene` into a :class:`ScenePlan`: the list of
+:class:`FunctionPlan` s the scene needs and, in ``omitted``, what was left out and why.  A
+function plan holds sympy expressions only (named *blocks* of entries, each a vector or
+a row-major matrix) and at most one linear-algebra *step* from a fixed menu
+(:data:`STEPS`), which every backend implements once in its template.  Lowering to a
+language (CSE, printing) is :mod:`symmech.codegen.lower`.
+
+Functions (velocity basis v: the coordinate velocities, or the quasi-velocities of a
+frame ``q_dot = S(q) v``; all equations cite :class:`~symmech.Scene`):
+
+``mass_matrix``       g(q), n x n (slides 000; T = 1/2 v^T g v)
+``forcing``           f(q, v, t) with ``g v_dot = f`` unconstrained: ``-Gamma_kij v^i v^j - dV``
+``acceleration``      v_dot: closed form, or ``g v_dot = f (+ mu^T lambda)`` solved in the code
+``rhs``               the first-order system y = (q, v): ``(S v, v_dot)``
+``energy``            T + V
+``multipliers``       lambda of Carnot paper section 2.2 (constrained scenes)
+``constraint_residual``  mu(q) v (constrained scenes)
+``psi_<wall>``, ``dpsi_<wall>``, ``psi_t_<wall>``  the guard psi(t, q), d psi/d q, d psi/d t
+``impact_<wall>``     v+ (Carnot paper eq. 10, Prop. 3.4, eq. 17, Prop. 4.2; text 001)
+``projector_P``, ``projector_Q``  Carnot paper section 2.2 (only when asked)
+
+Functions of time left arbitrary in a scene (``f(t)`` in ``psi = x - f(t)``, Carnot paper
+example 4.4) and their derivatives become run-time *inputs* ``u`` (see
+:attr:`ScenePlan.inputs`), unless ``definitions`` gives them an expression.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from symmech.declaration.symbols import t as TIME
+from symmech.errors import SymmechError
+
+if TYPE_CHECKING:
+    from symmech.scene import Scene
+
+__all__ = [
+    "FUNCTIONS",
+    "STEPS",
+    "STRATEGIES",
+    "Block",
+    "CodegenError",
+    "FunctionPlan",
+    "ScenePlan",
+    "build_plan",
+]
+
+STRATEGIES = ("auto", "closed_form", "linear_solve")
+
+#: Linear-algebra steps a backend implements (see the module docstring of
+#: :mod:`symmech.codegen.lower` for their exact equations).
+STEPS = ("spd_solve", "constrained_acceleration", "constrained_multipliers", "impact_kkt")
+
+#: Function kinds a user may ask for (``functions=``); wall functions are per wall.
+FUNCTIONS = (
+    "mass_matrix",
+    "forcing",
+    "acceleration",
+    "rhs",
+    "energy",
+    "multipliers",
+    "constraint_residual",
+    "psi",
+    "dpsi",
+    "psi_t",
+    "impact",
+    "projectors",
+)
+
+#: Above this number of coordinates the default strategy is ``linear_solve``.
+CLOSED_FORM_MAX_N = 3
+
+
+class CodegenError(SymmechError, ValueError):
+    """Code cannot be generated as asked (bad option, unsupported expression, ...)."""
+
+
+@dataclass(frozen=True)
+class Block:
+    """A named array of expressions: ``shape`` (), (k,) or (r, c); ``entries`` row-major."""
+
+    name: str
+    shape: tuple[int, ...]
+    entries: tuple[sp.Expr, ...]
+
+    @property
+    def size(self) -> int:
+        return len(self.entries)
+
+
+@dataclass(frozen=True)
+class FunctionPlan:
+    """One generated function.
+
+    ``state`` is the tuple of state arguments it takes, among ``"q"``, ``"v"`` and
+    ``"y"`` (``y = (q, v)`` for ``rhs``); ``uses_time`` / ``uses_inputs`` /
+    ``uses_parameters`` say whether ``t``, the inputs ``u`` and the run-time parameters
+    ``p`` appear.  The function evaluates ``blocks`` and then either returns the block
+    named ``"out"`` (``step is None``) or runs ``step`` on the blocks (``step_args`` are
+    the integer sizes it needs), writing ``out_shape`` entries.  ``calls`` names another
+    function whose result fills the tail of ``out`` (``rhs`` calls ``acceleration``).
+    """
+
+    name: str
+    kind: str
+    doc: str
+    equation: str
+    state: tuple[str, ...]
+    blocks: tuple[Block, ...]
+    out_shape: tuple[int, ...]
+    step: str | None = None
+    step_args: tuple[int, ...] = ()
+    calls: str | None = None
+    wall: str | None = None
+    uses_time: bool = False
+    uses_inputs: bool = False
+    uses_parameters: bool = False
+
+    @property
+    def out_size(self) -> int:
+        size = 1
+        for s in self.out_shape:
+            size *= s
+        return size
+
+
+@dataclass(frozen=True)
+class ScenePlan:
+    """Everything a backend needs to emit code for one scene."""
+
+    scene_name: str
+    n: int
+    m: int
+    coordinates: tuple[sp.Symbol, ...]
+    velocities: tuple[sp.Symbol, ...]
+    parameters: tuple[sp.Symbol, ...]  # run-time parameters p, in order
+    constants: tuple[tuple[sp.Symbol, sp.Expr], ...]  # parameters baked in
+    inputs: tuple[tuple[sp.Symbol, sp.Expr], ...]  # (dummy, f(t) or f'(t)) in slot order
+    walls: tuple[str, ...]
+    strategy: str
+    functions: tuple[FunctionPlan, ...]
+    omitted: tuple[str, ...] = field(default=())
+
+    def function(self, name: str) -> FunctionPlan:
+        for f in self.functions:
+            if f.name == name:
+                return f
+        raise KeyError(name)
+
+
+# ---------------------------------------------------------------------------------------
+
+
+def _matrix_block(name: str, M: sp.MatrixBase) -> Block:
+    M = sp.Matrix(M)
+    shape: tuple[int, ...] = (M.rows,) if M.cols == 1 else (M.rows, M.cols)
+    return Block(name, shape, tuple(M))
+
+
+def _scalar_block(name: str, e: sp.Expr) -> Block:
+    return Block(name, (), (sp.sympify(e),))
+
+
+class _Inputs:
+    """Arbitrary functions of time f(t) and their derivatives -> input slots u[k]."""
+
+    def __init__(self, definitions: Mapping):
+        self.definitions = dict(definitions)
+        self.slots: dict[sp.Expr, sp.Symbol] = {}
+
+    def _key(self, atom: sp.Expr) -> tuple[str, int]:
+        if isinstance(atom, sp.Derivative):
+            return (atom.expr.func.__name__, atom.derivative_count)
+        return (atom.func.__name__, 0)
+
+    def substitute(self, e: sp.Expr) -> sp.Expr:
+        e = sp.sympify(e)
+        if self.definitions:
+            e = e.subs(self.definitions).doit()
+        atoms = [a for a in e.atoms(sp.Derivative) if isinstance(a.expr, AppliedUndef)]
+        atoms += list(e.atoms(AppliedUndef))
+        rule = {}
+        for a in atoms:
+            f = a.expr if isinstance(a, sp.Derivative) else a
+            if f.args != (TIME,):
+                raise CodegenError(
+                    f"{a}: only functions of t alone can become run-time inputs; define it"
+                    " with definitions={...}"
+                )
+            if a not in self.slots:
+                name, order = self._key(a)
+                self.slots[a] = sp.Dummy(f"{name}{'_' + 'd' * order if order else ''}", real=True)
+            rule[a] = self.slots[a]
+        e = e.xreplace(rule) if rule else e
+        leftover = sorted(map(str, e.atoms(sp.Derivative)))
+        if leftover:
+            raise CodegenError(f"unevaluated derivatives {leftover} cannot be generated")
+        return e
+
+    def ordered(self) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
+        items = sorted(self.slots.items(), key=lambda kv: self._key(kv[0]))
+        return tuple((d, a) for a, d in items)
+
+
+def _check_constants(scene: Scene, constants: Mapping) -> dict[sp.Symbol, sp.Expr]:
+    out: dict[sp.Symbol, sp.Expr] = {}
+    by_name = {p.name: p for p in scene.parameters}
+    for key, value in constants.items():
+        sym = by_name.get(key) if isinstance(key, str) else key
+        if sym not in scene.parameters:
+            raise CodegenError(
+                f"constants: {key!r} is not a parameter of scene {scene.name!r}"
+                f" (parameters: {[p.name for p in scene.parameters]})"
+            )
+        if isinstance(value, bool):
+            raise CodegenError(f"constants: {sym} = {value!r} is not a real number")
+        try:
+            val = sp.sympify(value, strict=True)
+        except (sp.SympifyError, TypeError):
+            raise CodegenError(f"constants: {sym} = {value!r} is not a real number") from None
+        if not val.is_number or not val.is_real or not val.is_finite:
+            raise CodegenError(f"constants: {sym} = {value!r} is not a finite real number")
+        if sym.is_positive and not val.is_positive:
+            raise CodegenError(f"constants: {sym} is declared positive, got {val}")
+        if sym.is_nonnegative and val.is_negative:
+            raise CodegenError(f"constants: {sym} is declared non-negative, got {val}")
+        out[sym] = val
+    return out
+
+
+def build_plan(
+    scene: Scene,
+    *,
+    strategy: str = "auto",
+    functions: Sequence[str] | None = None,
+    constants: Mapping | None = None,
+    definitions: Mapping | None = None,
+    projectors: bool = False,
+) -> ScenePlan:
+    """The :class:`ScenePlan` of ``scene`` (see the module docstring).
+
+    ``strategy``: ``"closed_form"`` evaluates the symbolic acceleration, multipliers and
+    impact maps; ``"linear_solve"`` emits g, f, the constraint and wall one-forms and
+    solves the linear systems in the generated code; ``"auto"`` (default) is closed form
+    up to :data:`CLOSED_FORM_MAX_N` coordinates.  ``functions`` restricts the kinds
+    emitted (names from :data:`FUNCTIONS`).  ``constants`` bakes parameter values in
+    (folded into the expressions); the other parameters are run-time inputs ``p``.
+    ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
+    t and the parameters.  ``projectors`` adds P and Q (constrained scenes).
+    """
+    if strategy not in STRATEGIES:
+        raise CodegenError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
+    wanted = set(FUNCTIONS) if functions is None else set(functions)
+    unknown = sorted(wanted - set(FUNCTIONS))
+    if unknown:
+        raise CodegenError(f"functions: unknown {unknown}; choose from {list(FUNCTIONS)}")
+    if projectors:
+        wanted.add("projectors")
+    elif functions is None:
+        wanted.discard("projectors")
+    n, m = scene.n, scene.constraint_matrix.rows
+    if strategy == "auto":
+        strategy = "closed_form" if n <= CLOSED_FORM_MAX_N else "linear_solve"
+    baked = _check_constants(scene, constants or {})
+    runtime = tuple(p for p in scene.parameters if p not in baked)
+    defs: dict = {}
+    for key, value in (definitions or {}).items():
+        f = key(TIME) if isinstance(key, sp.FunctionClass) else key
+        if not isinstance(f, AppliedUndef):
+            raise CodegenError(f"definitions: {key!r} is not an arbitrary function of t")
+        defs[f] = sp.sympify(value)
+    inputs = _Inputs(defs)
+    q, v = scene.coordinates, scene.velocities
+    omitted: list[str] = []
+    plans: list[FunctionPlan] = []
+
+    def prepare(e: sp.Expr) -> sp.Expr:
+        e = inputs.substitute(e)
+        return e.xreplace(baked) if baked else e
+
+    def add(
+        name: str,
+        kind: str,
+        doc: str,
+        equation: str,
+        state: tuple[str, ...],
+        blocks: list[Block],
+        out_shape: tuple[int, ...],
+        step: str | None = None,
+        step_args: tuple[int, ...] = (),
+        calls: str | None = None,
+        wall: str | None = None,
+    ) -> None:
+        blocks = [Block(b.name, b.shape, tuple(prepare(e) for e in b.entries)) for b in blocks]
+        syms: set = set().union(*[e.free_symbols for b in blocks for e in b.entries])
+        slot_syms = set(inputs.slots.values())
+        uses_t, uses_u, uses_p = TIME in syms, bool(syms & slot_syms), bool(syms & set(runtime))
+        if calls is not None:
+            callee = next(f for f in plans if f.name == calls)
+            uses_t |= callee.uses_time
+            uses_u |= callee.uses_inputs
+            uses_p |= callee.uses_parameters
+        allowed = set(q) | set(v) | set(runtime) | slot_syms | {TIME}
+        stray = sorted(str(s) for s in syms - allowed)
+        if stray:
+            raise CodegenError(f"{name}: symbols {stray} are neither state nor parameters")
+        plans.append(
+            FunctionPlan(
+                name=name,
+                kind=kind,
+                doc=doc,
+                equation=equation,
+                state=state,
+                blocks=tuple(blocks),
+                out_shape=out_shape,
+                step=step,
+                step_args=step_args,
+                calls=calls,
+                wall=wall,
+                uses_time=uses_t,
+                uses_inputs=uses_u,
+                uses_parameters=uses_p,
+            )
+        )
+
+    M = sp.Matrix(scene.mass_matrix())
+    f = sp.Matrix(scene.forcing())
+    mu = sp.Matrix(scene.constraint_matrix)
+    closed = strategy == "closed_form"
+
+    if "mass_matrix" in wanted:
+        add(
+            "mass_matrix",
+            "mass_matrix",
+            "kinetic metric g(q) in the velocity basis",
+            "T = 1/2 v^T g v",
+            ("q",),
+            [_matrix_block("out", M)],
+            (n, n),
+        )
+    if "forcing" in wanted:
+        add(
+            "forcing",
+            "forcing",
+            "forcing f(q, v, t) of the unconstrained equations g v_dot = f",
+            "f_k = -Gamma_kij v^i v^j - dV/dq^k (first kind, no inverse)",
+            ("q", "v"),
+            [_matrix_block("out", f)],
+            (n,),
+        )
+    need_acc = bool({"acceleration", "rhs"} & wanted)
+    if need_acc:
+        if closed:
+            acc = sp.Matrix(scene.acceleration())
+            add(
+                "acceleration",
+                "acceleration",
+                "acceleration v_dot (closed form)",
+                "g v_dot = f + mu^T lambda, mu v = 0 (Carnot paper eq. 5)",
+                ("q", "v"),
+                [_matrix_block("out", acc)],
+                (n,),
+            )
+        elif m:
+            add(
+                "acceleration",
+                "acceleration",
+                "acceleration v_dot, constrained system solved in the code",
+                "g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)",
+                ("q", "v"),
+                [
+                    _matrix_block("M", M),
+                    _matrix_block("f", f),
+                    _matrix_block("mu", mu),
+                    _matrix_block("rate", scene.constraint_rate()),
+                ],
+                (n,),
+                step="constrained_acceleration",
+                step_args=(n, m),
+            )
+        else:
+            add(
+                "acceleration",
+                "acceleration",
+                "acceleration v_dot, g v_dot = f solved in the code (Cholesky)",
+                "g v_dot = f (Carnot paper eq. 2)",
+                ("q", "v"),
+                [_matrix_block("M", M), _matrix_block("f", f)],
+                (n,),
+                step="spd_solve",
+                step_args=(n, 1),
+            )
+    if "rhs" in wanted:
+        qdot = sp.Matrix(scene.kinematics())
+        add(
+            "rhs",
+            "rhs",
+            "first-order system y = (q, v): y_dot = (q_dot, v_dot)",
+            "q_dot = S(q) v, v_dot = acceleration(q, v)",
+            ("y",),
+            [_matrix_block("out", qdot)],
+            (2 * n,),
+            calls="acceleration",
+        )
+    if "acceleration" not in wanted and need_acc:
+        # rhs needs it: keep it, but say so
+        omitted.append("acceleration was not asked for but is emitted: rhs calls it")
+    if "energy" in wanted:
+        add(
+            "energy",
+            "energy",
+            "total energy T + V",
+            "E = 1/2 v^T g v + V(q, t)",
+            ("q", "v"),
+            [_scalar_block("out", scene.energy())],
+            (),
+        )
+    if m:
+        if "multipliers" in wanted:
+            if closed:
+                add(
+                    "multipliers",
+                    "multipliers",
+                    "Lagrange multipliers lambda (closed form)",
+                    "lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)",
+                    ("q", "v"),
+                    [_matrix_block("out", scene.multipliers())],
+                    (m,),
+                )
+            else:
+                add(
+                    "multipliers",
+                    "multipliers",
+                    "Lagrange multipliers lambda, solved in the code",
+                    "lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)",
+                    ("q", "v"),
+                    [
+                        _matrix_block("M", M),
+                        _matrix_block("f", f),
+                        _matrix_block("mu", mu),
+                        _matrix_block("rate", scene.constraint_rate()),
+                    ],
+                    (m,),
+                    step="constrained_multipliers",
+                    step_args=(n, m),
+                )
+        if "constraint_residual" in wanted:
+            add(
+                "constraint_residual",
+                "constraint_residual",
+                "constraint residual mu(q) v (zero on the constraint distribution D)",
+                "r_a = mu^a_i(q) v^i",
+                ("q", "v"),
+                [_matrix_block("out", mu * sp.Matrix(v))],
+                (m,),
+            )
+        if "projectors" in wanted:
+            P, Q = scene.projectors()
+            for label, mat, what in (("P", P, "onto D"), ("Q", Q, "onto D^perp")):
+                add(
+                    f"projector_{label}",
+                    "projectors",
+                    f"g-orthogonal projector {label} {what}",
+                    "Q = Z C^-1 mu, P = I - Q (Carnot paper section 2.2)",
+                    ("q",),
+                    [_matrix_block("out", mat)],
+                    (n, n),
+                )
+    else:
+        omitted.append("multipliers, constraint residual, projectors: the scene has no constraints")
+
+    S = scene.frame
+    for w in scene.walls:
+        wname = w.name
+        grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in q]])
+        psi_t = sp.diff(w.psi, TIME)
+        if "psi" in wanted:
+            add(
+                f"psi_{wname}",
+                "psi",
+                f"gap of wall {wname!r}; the admissible side is psi >= 0",
+                f"psi = {w.psi}",
+                ("q",),
+                [_scalar_block("out", w.psi)],
+                (),
+                wall=wname,
+            )
+        if "dpsi" in wanted:
+            add(
+                f"dpsi_{wname}",
+                "dpsi",
+                f"gradient d psi/d q of wall {wname!r} (coordinates)",
+                "dpsi_i = d psi / d q^i",
+                ("q",),
+                [_matrix_block("out", grad.T)],
+                (n,),
+                wall=wname,
+            )
+        if "psi_t" in wanted:
+            if psi_t != 0:
+                add(
+                    f"psi_t_{wname}",
+                    "psi_t",
+                    f"time derivative d psi/d t of the moving wall {wname!r}",
+                    "psi_t = d psi / d t; d/dt psi(t, q(t)) = psi_t + dpsi(q_dot)",
+                    ("q",),
+                    [_scalar_block("out", psi_t)],
+                    (),
+                    wall=wname,
+                )
+            else:
+                omitted.append(f"psi_t_{wname}: the wall does not move (d psi/d t = 0)")
+        if "impact" in wanted:
+            imp = scene.impact_map(w.index)
+            if closed or w.law == "energy":
+                if not closed:
+                    omitted.append(
+                        f"impact_{wname}: the energy law (text 001, 3.2) is not linear;"
+                        " its closed form is emitted even with strategy linear_solve"
+                    )
+                add(
+                    f"impact_{wname}",
+                    "impact",
+                    f"post-impact velocity at wall {wname!r} ({w.law} law, closed form)",
+                    _impact_equation(imp),
+                    ("q", "v"),
+                    [_matrix_block("out", imp.post_velocity)],
+                    (n,),
+                    wall=wname,
+                )
+            else:
+                dpsi_v = grad * S if S is not None else grad
+                A = mu.col_join(dpsi_v).col_join(sp.Matrix(w.impulsive_matrix))
+                k = A.rows
+                add(
+                    f"impact_{wname}",
+                    "impact",
+                    f"post-impact velocity at wall {wname!r} (Newton law, KKT solved in the code)",
+                    "g (v+ - v-) = A^T lambda, A = [mu; dpsi; nu]; mu v+ = 0,"
+                    " dpsi v+ + psi_t = -alpha (dpsi v- + psi_t), nu (v+ - V) = 0"
+                    " (Carnot paper eqs. 6, 15, 20)",
+                    ("q", "v"),
+                    [
+                        _matrix_block("M", M),
+                        _matrix_block("A", A),
+                        Block("s", (2,), (sp.sympify(w.restitution), psi_t)),
+                    ],
+                    (n,),
+                    step="impact_kkt",
+                    step_args=(n, k, m),
+                    wall=wname,
+                )
+    if not scene.walls:
+        omitted.append("psi, dpsi, impact maps: the scene has no walls")
+    if closed:
+        omitted.append("linear-algebra routines: strategy closed_form evaluates closed forms")
+    if sp.sympify(scene.potential) == 0:
+        omitted.append("potential terms: V = 0")
+    if not any(p.uses_time for p in plans):
+        omitted.append("time argument t: nothing depends on t")
+    if baked:
+        omitted.append(
+            "parameters baked in as constants: "
+            + ", ".join(f"{s} = {val}" for s, val in baked.items())
+        )
+    return ScenePlan(
+        scene_name=scene.name,
+        n=n,
+        m=m,
+        coordinates=tuple(q),
+        velocities=tuple(v),
+        parameters=runtime,
+        constants=tuple(baked.items()),
+        inputs=inputs.ordered(),
+        walls=tuple(w.name for w in scene.walls),
+        strategy=strategy,
+        functions=tuple(plans),
+        omitted=tuple(omitted),
+    )
+
+
+def _impact_equation(imp) -> str:
+    if imp.law == "energy":
+        return "v+ = W + PP (v- - W) + alpha sqrt(...) N (text 001, section 3.2)"
+    if imp.moving:
+        return "v+ = (PP - alpha T~) (v- - W) + W (Carnot paper eq. 17, Prop. 4.2)"
+    return "v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)"
