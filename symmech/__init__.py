@@ -18,6 +18,14 @@ from symmech.declaration.wall import Wall
 from symmech.errors import ExpressionError, ImpactError, SceneError, SymmechError
 from symmech.geometry.lie import bracket_rank, hat, is_involutive, lie_bracket
 from symmech.scene import Scene
+from symmech.scenefile import (
+    SceneFile,
+    SceneFileError,
+    dump_scene,
+    load_scene,
+    loads_scene,
+    read_scene,
+)
 
 __version__ = "0.1.0"
 
@@ -26,15 +34,21 @@ __all__ = [
     "ImpactError",
     "Scene",
     "SceneError",
+    "SceneFile",
+    "SceneFileError",
     "SymmechError",
     "Wall",
     "__version__",
     "bracket_rank",
     "coordinates",
+    "dump_scene",
     "hat",
     "is_involutive",
     "lie_bracket",
+    "load_scene",
+    "loads_scene",
     "parse_expression",
+    "read_scene",
     "shapes",
     "t",
     "velocities",

@@ -46,11 +46,14 @@ def bouncing_ellipse(restitution: object = 1) -> Scene:
 
 def spinning_disk(law: str = "energy") -> Scene:
     """Text 001, section 3.2: a spinning disk (mass m, inertia I, radius R) hits the rough
-    wall x = 0 from the side x > 0; at impact it rolls on the wall, ``y_dot + R theta_dot = 0``."""
+    wall x = 0 from the side x < 0, as in the text; at impact it rolls on the wall.  The
+    contact point (x + R, y) moves with ``(x_dot, y_dot + R theta_dot)`` (theta
+    counter-clockwise), so rolling is the text's ``y_dot + R theta_dot = 0``, and the
+    rebound x_dot+ is the text's negative root."""
     x, y, th = coordinates("x y theta")
     _, yd, thd = velocities((x, y, th))
     m, I, R = sp.symbols("m I R", positive=True)
-    psi = shapes.disk_gap((x, y), R, shapes.Plane((0, 0), (1, 0)))
+    psi = shapes.disk_gap((x, y), R, shapes.Plane((0, 0), (-1, 0)))
     wall = Wall(psi, restitution=1, impulsive_constraints=[yd + R * thd], name="wall", law=law)
     return Scene((x, y, th), metric=sp.diag(m, m, I), walls=[wall], name="spinning_disk")
 

@@ -355,9 +355,11 @@ def declare(
     if S is not None:
         fields.append(("frame", S, q_set))
     fields.append(("constraints", mu, q_set))
-    for k, (_, psi, nu) in enumerate(resolved):
+    for k, (w, psi, nu) in enumerate(resolved):
         fields.append((f"walls[{k}].psi", psi, q_set | {TIME}))
         fields.append((f"walls[{k}].impulsive_constraints", nu, q_set | {TIME}))
+        # a symbolic restitution alpha is a parameter of the scene like any other
+        fields.append((f"walls[{k}].restitution", sp.sympify(w.restitution), set()))
     if parameters is None:
         found: set[sp.Symbol] = set()
         for _, e, allowed in fields:

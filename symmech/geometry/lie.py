@@ -467,6 +467,15 @@ class InvolutivityResult:
     def __bool__(self) -> bool:
         return self.involutive
 
+    def _repr_latex_(self) -> str:
+        if self.involutive:
+            return f"$\\text{{involutive (rank {self.rank} of {self.dimension})}}$"
+        i, j = self.pair or (0, 0)
+        return (
+            f"$\\text{{not involutive: }} [X_{{{i}}}, X_{{{j}}}] = {sp.latex(self.bracket)}"
+            f" \\notin \\operatorname{{span}}\\{{X\\}}$"
+        )
+
 
 def is_involutive(
     fields: Sequence[Field],
@@ -544,6 +553,22 @@ class BracketRankResult:
     bracket_generating: bool
     notes: tuple[str, ...] = ()
     policy: str = field(default=GENERIC_RANK_POLICY, repr=False)
+
+    def _repr_latex_(self) -> str:
+        words = ", ".join(_latex_word(w) for w in self.words)
+        verdict = "bracket-generating" if self.bracket_generating else "not bracket-generating"
+        return (
+            f"$\\text{{rank {self.rank} of {self.manifold_dimension} at depth {self.depth}"
+            f" ({verdict}): }} {words}$"
+        )
+
+
+def _latex_word(word: tuple[int, ...]) -> str:
+    """``(i,) -> X_i``, ``(i, j, k) -> [X_i, [X_j, X_k]]`` (left-normed)."""
+    out = f"X_{{{word[-1]}}}"
+    for i in reversed(word[:-1]):
+        out = f"[X_{{{i}}}, {out}]"
+    return out
 
 
 def bracket_rank(

@@ -76,6 +76,26 @@ class CarnotResult:
         """True if the residual simplifies to 0."""
         return self.residual == 0 or self.simplified() == 0
 
+    def _repr_latex_(self) -> str:
+        return (
+            f"$\\text{{{self.theorem}: }} {self.statement_latex()}"
+            f"\\quad\\text{{residual }} = {sp.latex(self.residual)}$"
+        )
+
+    def statement_latex(self) -> str:
+        """The statement with T_1 / T_0 / alpha written as LaTeX."""
+        text = self.statement
+        for plain, tex in (
+            ("alpha", "\\alpha"),
+            ("T1'", "T_1'"),
+            ("T0'", "T_0'"),
+            ("T1", "T_1"),
+            ("T0", "T_0"),
+            ("T_l", "T_l"),
+        ):
+            text = text.replace(plain, tex)
+        return text
+
 
 def _in_F(proj: ImpactProjectors) -> bool:
     """``P(Y^0) in F``, i.e. ``C^{A0} = nu^A(P Y^0) = 0`` for A >= 1 (Lemma 3.10)."""

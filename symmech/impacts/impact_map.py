@@ -150,6 +150,14 @@ class ImpactMap:
         self._linear_only("offset")
         return self._offset
 
+    def _repr_latex_(self) -> str:
+        v = sp.Matrix(self.velocities)
+        return (
+            f"$\\dot q^+ = {sp.latex(self.post_velocity)}"
+            f"\\quad(\\text{{wall {self.wall.name}, {self.law} law, pre-impact }}"
+            f"{sp.latex(v.T)})$"
+        )
+
     def __repr__(self) -> str:
         kind = "moving" if self.moving else "static"
         return (
