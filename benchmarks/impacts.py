@@ -1,0 +1,120 @@
+"""Benchmark: derive complete impact maps from their declarations.
+
+Cases: Carnot paper Example 3.13 (rolling sphere hits a rough wall, quasi-velocities in an
+Euler-angle frame), Example 4.4 (the same sphere hits the moving wall x = f(t)) and text
+001's bouncing ellipse (support-function gap, restitution alpha).  For each it prints the
+time to build the Scene and derive the impact map (fresh Scene, nothing cached), the time
+of the Carnot residual, and sympy.count_ops of the map before ("raw", ``simplify="none"``)
+and after the stabilising simplification (the default).
+
+Run:  python benchmarks/impacts.py          (not run in CI)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import sympy as sp
+
+import symmech as sm
+from symmech.declaration import shapes
+from symmech.impacts import derive_impact_map
+
+k, r, m, I, a, b = sp.symbols("k r m I a b", positive=True)
+alpha = sp.Symbol("alpha", nonnegative=True)
+f = sp.Function("f")
+
+
+def euler_frame() -> tuple[tuple[sp.Symbol, ...], sp.Matrix]:
+    """q = (x, y, z, phi, theta, psi) and S = blockdiag(I3, B^-1), (wx, wy, wz) = B q_dot."""
+    q = sm.coordinates("x y z phi theta psi")
+    th, ps = q[4], q[5]
+    st, ct, sps, cps = sp.sin(th), sp.cos(th), sp.sin(ps), sp.cos(ps)
+    Binv = sp.Matrix([[sps / st, -cps / st, 0], [cps, sps, 0], [-ct * sps / st, ct * cps / st, 1]])
+    return q, sp.diag(sp.eye(3), Binv)
+
+
+Q_EULER, S_EULER = euler_frame()
+_B = sp.Matrix(
+    [
+        [sp.sin(Q_EULER[4]) * sp.sin(Q_EULER[5]), sp.cos(Q_EULER[5]), 0],
+        [-sp.sin(Q_EULER[4]) * sp.cos(Q_EULER[5]), sp.sin(Q_EULER[5]), 0],
+        [sp.cos(Q_EULER[4]), 0, 1],
+    ]
+)
+assert sp.simplify(_B * S_EULER[3:, 3:]) == sp.eye(3)
+
+
+def sphere_scene(moving: bool) -> sm.Scene:
+    v = sp.symbols("xd yd zd omega_x omega_y omega_z", real=True)
+    xd, yd, zd, wx, wy, wz = v
+    x = Q_EULER[0]
+    psi = x - f(sm.t) if moving else x
+    wall = sm.Wall(psi, restitution=alpha, impulsive_constraints=[yd - r * wz], name="wall")
+    return sm.Scene(
+        Q_EULER,
+        metric=sp.diag(1, 1, 1, k**2, k**2, k**2),
+        frame=S_EULER,
+        quasi_velocities=v,
+        constraints=[xd - r * wy, yd + r * wx, zd],
+        walls=[wall],
+    )
+
+
+def ellipse_scene() -> sm.Scene:
+    x, y, th = sm.coordinates("x y theta")
+    psi = shapes.ellipse_gap((x, y), th, (a, b), shapes.Plane((0, 0), (-1, 0)))
+    return sm.Scene((x, y, th), metric=sp.diag(m, m, I), walls=[sm.Wall(psi, restitution=alpha)])
+
+
+def ops(M: sp.MatrixBase) -> int:
+    return int(sum(sp.count_ops(e) for e in M))
+
+
+def run(name: str, build: Callable[[], sm.Scene]) -> tuple:
+    t0 = time.perf_counter()
+    scene = build()
+    imp = scene.impact_map(0)
+    derive = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    result = imp.carnot()
+    carnot = time.perf_counter() - t0
+    assert sp.simplify(result.residual) == 0, result
+    raw = derive_impact_map(build().declaration, 0, simplify="none")
+    return (
+        name,
+        derive,
+        carnot,
+        result.theorem,
+        ops(raw.post_velocity),
+        ops(imp.post_velocity),
+        ops(raw.matrix) + ops(raw.offset),
+        ops(imp.matrix) + ops(imp.offset),
+    )
+
+
+def main() -> None:
+    # warm up sympy's caches of imports and printers on a tiny scene
+    x, y = sm.coordinates("x y")
+    sm.Scene((x, y), metric=sp.eye(2), walls=[sm.Wall(y)]).impact_map(0).carnot()
+    rows = [
+        run("Example 3.13 (sphere, rough wall)", lambda: sphere_scene(False)),
+        run("Example 4.4 (sphere, moving wall)", lambda: sphere_scene(True)),
+        run("text 001 3.1 (bouncing ellipse)", ellipse_scene),
+    ]
+    head = (
+        f"{'case':36s} {'derive [s]':>10s} {'carnot [s]':>10s}  {'theorem':26s}"
+        f" {'ops v+ raw':>10s} {'ops v+':>7s} {'ops M,o raw':>11s} {'ops M,o':>8s}"
+    )
+    print(head)
+    print("-" * len(head))
+    for name, derive, carnot, theorem, pr, ps, mr, ms in rows:
+        print(
+            f"{name:36s} {derive:10.2f} {carnot:10.2f}  {theorem:26s}"
+            f" {pr:10d} {ps:7d} {mr:11d} {ms:8d}"
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,405 @@
+"""The ``symmech`` command line (issue 5), driven as a user drives it: a subprocess
+``python -m symmech ...``, checking its output, its stderr and its exit code.
+
+``derive`` is tested with the code generation (tests/test_codegen*).  Expected values come
+from the texts (formulas typed in by hand, printed with sympy's own printers), from
+``pyproject.toml`` (the version) and from the rules of issue 5 (progress on stderr, one
+error line, exit codes); none is produced by symmech.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+import sympy as sp
+
+from symmech.scenefile import loads_scene, read_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+# Issue 5: "at least the bouncing ellipse, the spinning disk of text 001, Examples 3.7,
+# 3.13, 4.4 of the Carnot paper, the rolling ball and the car of the slides".
+REQUIRED_SCENES = (
+    "bouncing_ellipse",
+    "spinning_disk",
+    "carnot_3_7",
+    "carnot_3_13",
+    "carnot_4_4",
+    "rolling_ball",
+    "car",
+)
+PROGRESS = re.compile(r"^\[symmech +(\d+\.\d\d)s\] (.+)$")
+EXIT_INPUT = 2  # bad input: unknown scene, refused scene file, usage (cli module docstring)
+
+
+def symmech(*args: str, cwd: Path, timeout: float = 120) -> subprocess.CompletedProcess:
+    """Run ``python -m symmech ARGS`` in ``cwd``; return the finished process (text)."""
+    env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
+    return subprocess.run(
+        [sys.executable, "-m", "symmech", *args],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
+        timeout=timeout,
+    )
+
+
+def _error_lines(stderr: str) -> list[str]:
+    return [line for line in stderr.splitlines() if not PROGRESS.match(line)]
+
+
+def assert_one_line_error(proc: subprocess.CompletedProcess, *fragments: str) -> str:
+    """A refused command: non-zero exit, no traceback, one error line holding fragments."""
+    assert proc.returncode == EXIT_INPUT, (proc.returncode, proc.stderr)
+    assert "Traceback" not in proc.stderr
+    lines = _error_lines(proc.stderr)
+    assert len(lines) == 1, proc.stderr
+    (line,) = lines
+    assert line.startswith("symmech: error: ")
+    for fragment in fragments:
+        assert fragment in line, (fragment, line)
+    return line
+
+
+# the formulas of the texts, written here
+X, Y, TH = (sp.Symbol(s, real=True) for s in ("x", "y", "theta"))
+XD, YD, THD = (sp.Symbol(s, real=True) for s in ("xdot", "ydot", "thetadot"))
+M, I_, A, B, K, R = sp.symbols("m I a b k R", positive=True)
+ALPHA = sp.Symbol("alpha", nonnegative=True)
+# text 001 §3.1: the wall x = 0, approached from x < 0: psi = -x - h(theta)
+ELLIPSE_PSI = -X - sp.sqrt(A**2 * sp.cos(TH) ** 2 + B**2 * sp.sin(TH) ** 2)
+
+
+def _pretty(expr: sp.Basic) -> str:
+    return sp.pretty(expr, use_unicode=True, wrap_line=False)
+
+
+# ---------------------------------------------------------------------------------------
+# examples, --version
+
+
+def test_examples_lists_the_builtin_scenes(tmp_path: Path):
+    proc = symmech("examples", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    rows = [line.split(None, 1) for line in proc.stdout.splitlines()]
+    names = [row[0] for row in rows]
+    assert set(REQUIRED_SCENES) <= set(names)
+    assert len(names) == len(set(names))
+    # every row has a description, and every scene listed loads
+    assert all(len(row) == 2 and row[1].strip() for row in rows)
+    for name in names:
+        assert read_scene(name).scene.name == name
+    assert "text 001" in dict(rows)["bouncing_ellipse"]
+    assert "3.7" in dict(rows)["carnot_3_7"]
+
+
+def test_version_is_the_package_version(tmp_path: Path):
+    version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    proc = symmech("--version", cwd=tmp_path)
+    assert proc.returncode == 0
+    assert proc.stdout == f"symmech {version}\n"
+    assert proc.stderr == ""
+
+
+# ---------------------------------------------------------------------------------------
+# show
+
+
+def test_show_bouncing_ellipse_text_and_progress(tmp_path: Path):
+    proc = symmech("show", "bouncing_ellipse", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    for title in (
+        "== coordinates",
+        "== mass matrix",
+        "== Christoffel symbols",
+        "== wall 'wall': gap psi",
+        "== wall 'wall': post-impact velocity v+ (newton law, restitution 1)",
+        "== wall 'wall': Theorem",
+    ):
+        assert title in out, title
+    # the mass matrix diag(m, m, I) and the gap of text 001 §3.1, pretty-printed
+    assert _pretty(sp.diag(M, M, I_)) in out
+    assert _pretty(ELLIPSE_PSI) in out
+    # progress on stderr: stage and elapsed time, in order, the impact map among the stages
+    lines = proc.stderr.splitlines()
+    assert lines and all(PROGRESS.match(line) for line in lines), proc.stderr
+    times = [float(PROGRESS.match(line).group(1)) for line in lines]
+    stages = [PROGRESS.match(line).group(2) for line in lines]
+    assert times == sorted(times)
+    assert "impact map of wall 'wall'" in stages
+    assert stages[-1] == "done"
+
+
+def test_show_bouncing_ellipse_latex(tmp_path: Path):
+    proc = symmech("--quiet", "show", "bouncing_ellipse", "--latex", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    assert f"\\[ {sp.latex(ELLIPSE_PSI)} \\]" in out
+    assert f"\\[ {sp.latex(sp.diag(M, M, I_))} \\]" in out
+    assert "\\paragraph{wall 'wall': post-impact velocity v+" in out
+    # LaTeX, not the terminal's pretty printing
+    assert "⎡" not in out and "==" not in out
+    # titles are LaTeX text: no special character left unescaped ("v^T", "Gamma^k_ij")
+    titles = re.findall(r"^\\paragraph\{(.*)\}$", out, re.M)
+    assert len(titles) >= 8
+    for title in titles:
+        plain = re.sub(r"\\(text(asciicircum|asciitilde|backslash)\{\}|[&%$#_{}])", "", title)
+        assert not set(plain) & set("\\^_&%$#~{}"), title
+    assert "M (T = 1/2 v\\textasciicircum{}T M v)" in out
+
+
+def test_show_carnot_3_7_text(tmp_path: Path):
+    proc = symmech("show", "carnot_3_7", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    out = proc.stdout
+    assert _pretty(sp.diag(M, M, M * K**2)) in out
+    assert _pretty(Y - R) in out  # the rough wall y = R
+    assert "restitution alpha" in out
+    # Theorem 3.11 (Carnot's theorem with instantaneous constraints) holds: residual 0
+    assert re.search(r"== wall 'rough_wall': Theorem 3\.11 residual \(0 when it holds\)\n0\n", out)
+
+
+def test_show_carnot_3_7_latex(tmp_path: Path):
+    proc = symmech("show", "carnot_3_7", "--latex", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    # the paper's post-impact velocity: ydot+ = -alpha ydot-
+    assert sp.latex(-ALPHA * YD) in out
+    assert f"\\[ {sp.latex(Y - R)} \\]" in out
+    assert (
+        "\\paragraph{wall 'rough\\_wall': Theorem 3.11 residual (0 when it holds)}\n\\[ 0 \\]"
+        in out
+    )
+
+
+def test_no_command_shows_the_bouncing_ellipse(tmp_path: Path):
+    default = symmech("--quiet", cwd=tmp_path)
+    assert default.returncode == 0, default.stderr
+    assert default.stderr == ""
+    assert "== wall 'wall': gap psi" in default.stdout
+    assert _pretty(ELLIPSE_PSI) in default.stdout
+
+
+def test_quiet_silences_progress_wherever_it_is_written(tmp_path: Path):
+    for args in (("--quiet", "show", "spinning_disk"), ("show", "spinning_disk", "--quiet")):
+        proc = symmech(*args, cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        assert proc.stderr == ""
+        assert "energy law" in proc.stdout
+
+
+# ---------------------------------------------------------------------------------------
+# verify
+
+
+def test_verify_passes_every_textbook_check(tmp_path: Path):
+    proc = symmech("verify", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert proc.stderr == ""
+    lines = proc.stdout.splitlines()
+    assert re.match(r"example +quantity +result$", lines[0])
+    rows = [line for line in lines[2:] if line.strip() and not re.match(r"\d+ passed", line)]
+    assert "FAIL" not in proc.stdout
+    assert all(re.search(r"  ok  .*\(\d+\.\ds\)$", row) for row in rows), rows
+    summary = re.search(r"^(\d+) passed, (\d+) failed$", proc.stdout, re.M)
+    assert summary and int(summary.group(1)) == len(rows) and summary.group(2) == "0"
+    # a check of each text: slides 000, text 001, the Carnot paper's worked examples
+    for example in (
+        "slides 000: rolling ball",
+        "slides 000: car",
+        "text 001 §3.1: bouncing ellipse",
+        "text 001 §3.2: spinning disk",
+        "Carnot ex. 3.7",
+        "Carnot ex. 3.12",
+        "Carnot ex. 3.13",
+        "Carnot ex. 4.4",
+    ):
+        assert any(row.startswith(example) for row in rows), example
+
+
+def test_verify_selects_checks_and_refuses_an_empty_selection(tmp_path: Path):
+    proc = symmech("verify", "-k", "ex. 4.4", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert re.search(r"^2 passed, 0 failed$", proc.stdout, re.M)
+    assert all(PROGRESS.match(line) for line in proc.stderr.splitlines())
+    assert "check Carnot ex. 4.4" in proc.stderr
+    assert_one_line_error(symmech("verify", "-k", "no such check", cwd=tmp_path), "no such check")
+
+
+# ---------------------------------------------------------------------------------------
+# export
+
+
+def test_export_writes_a_scene_file_that_loads_back(tmp_path: Path):
+    out = tmp_path / "disc.toml"
+    proc = symmech("export", "carnot_3_7", "-o", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == ""
+    assert f"wrote {out}" in proc.stderr
+    back = read_scene(out)
+    builtin = read_scene("carnot_3_7")
+    assert back.scene.name == "carnot_3_7"
+    assert back.defaults == builtin.defaults
+    assert back.scene.parameters == builtin.scene.parameters
+    assert back.scene.mass_matrix() == sp.diag(M, M, M * K**2)
+    (wall,) = back.scene.walls
+    assert (wall.name, wall.restitution, wall.psi) == ("rough_wall", ALPHA, Y - R)
+    assert wall.impulsive_matrix == sp.Matrix([[1, 0, -R]])  # xdot - R thetadot
+    # and the exported file is a scene file like any other for the other commands
+    shown = symmech("--quiet", "show", str(out), "--latex", cwd=tmp_path)
+    assert shown.returncode == 0, shown.stderr
+    assert sp.latex(-ALPHA * YD) in shown.stdout
+
+
+def test_export_to_stdout_moving_wall(tmp_path: Path):
+    proc = symmech("export", "carnot_4_4", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    sf = loads_scene(proc.stdout)
+    f = sp.Function("f", real=True)(sp.Symbol("t", real=True))
+    assert sf.scene.walls[0].psi == X - f
+    assert sf.functions == {"f": f}
+
+
+def test_export_into_a_missing_folder_is_one_line(tmp_path: Path):
+    target = tmp_path / "no" / "such" / "folder" / "x.toml"
+    proc = symmech("export", "car", "-o", str(target), cwd=tmp_path)
+    assert_one_line_error(proc, str(target), "No such file or directory")
+
+
+# ---------------------------------------------------------------------------------------
+# errors
+
+
+def test_unknown_scene_is_one_readable_line(tmp_path: Path):
+    proc = symmech("show", "carnot_3_8", cwd=tmp_path)
+    line = assert_one_line_error(proc, "'carnot_3_8'", "carnot_3_7", "symmech examples")
+    assert "neither a scene file nor a built-in scene" in line
+    quiet = symmech("--quiet", "show", "no_such_scene", cwd=tmp_path)
+    assert_one_line_error(quiet, "no_such_scene")
+    assert len(quiet.stderr.splitlines()) == 1
+    missing = symmech("show", "missing.toml", cwd=tmp_path)
+    assert_one_line_error(missing, "missing.toml: no such scene file")
+
+
+def test_hostile_scene_file_is_refused_and_runs_nothing(tmp_path: Path):
+    marker = tmp_path / "PWNED_x"
+    evil = tmp_path / "evil.toml"
+    evil.write_text(
+        'coordinates = ["x"]\n'
+        'metric = ["m"]\n'
+        f"potential = \"__import__('os').system('touch {marker}')\"\n"
+        "[parameters]\n"
+        "m = 1\n",
+        encoding="utf-8",
+    )
+    for command in ("show", "export"):
+        proc = symmech(command, str(evil), cwd=tmp_path)
+        assert_one_line_error(
+            proc, str(evil), "potential (line 3, col 1)", "__import__('os').system", "not allowed"
+        )
+    assert not marker.exists()
+
+
+def test_malformed_scene_file_is_one_readable_line(tmp_path: Path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('coordinates = ["x", "y"]\nmetric = ["m", "m"\n[parameters]\nm = 1\n')
+    proc = symmech("show", str(bad), cwd=tmp_path)
+    assert_one_line_error(proc, str(bad), "(line 3)", "not valid TOML")
+    # several problems in one file: still one line, naming each
+    two = tmp_path / "two.toml"
+    two.write_text(
+        'coordinates = ["x", "y"]\nmetric = ["m", "m"]\npotential = "m*y.real"\n'
+        'constraint = ["xdot"]\n[parameters]\nm = 1\n'
+    )
+    proc = symmech("--quiet", "show", str(two), cwd=tmp_path)
+    line = assert_one_line_error(proc, "2 problems", "did you mean 'constraints'")
+    assert "potential (line 3, col 3): attribute access 'y.real'" in line
+    assert "constraint (line 4)" in line
+    assert len(proc.stderr.splitlines()) == 1
+
+
+def test_debug_shows_the_traceback(tmp_path: Path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('coordinates = ["x"]\nmetric = ["m.real"]\n[parameters]\nm = 1\n')
+    for args in (("--debug", "show", str(bad)), ("show", str(bad), "--debug")):
+        proc = symmech(*args, cwd=tmp_path)
+        assert proc.returncode != 0
+        assert "Traceback (most recent call last)" in proc.stderr
+        assert "SceneFileError" in proc.stderr
+        assert "metric[0,0] (line 2, col 1): attribute access 'm.real'" in proc.stderr
+    ok = symmech("--debug", "--quiet", "examples", cwd=tmp_path)
+    assert ok.returncode == 0 and ok.stderr == ""
+
+
+_FAILING_DERIVATION = """\
+import sys
+import symmech.cli as cli
+
+def fail(*args, **kwargs):
+    raise {exc}
+
+cli.derivation = fail
+sys.exit(cli.main({argv!r}))
+"""
+
+
+@pytest.mark.parametrize(
+    ("exc", "code", "fragments"),
+    [
+        ("RuntimeError('boom')", 3, ["symmech: internal error: RuntimeError: boom", "--debug"]),
+        ("KeyboardInterrupt()", 130, ["symmech: interrupted"]),
+    ],
+    ids=["internal error", "interrupted"],
+)
+def test_unexpected_failure_is_one_line(tmp_path: Path, exc: str, code: int, fragments: list[str]):
+    """A failure inside a derivation (simulated: symmech has none on purpose) is one line."""
+    script = _FAILING_DERIVATION.format(exc=exc, argv=["--quiet", "show", "car"])
+    proc = subprocess.run(
+        [sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == code
+    assert "Traceback" not in proc.stderr
+    assert len(proc.stderr.splitlines()) == 1, proc.stderr
+    for fragment in fragments:
+        assert fragment in proc.stderr
+    debug = script.replace("'--quiet'", "'--debug', '--quiet'")
+    if code == 3:
+        proc = subprocess.run(
+            [sys.executable, "-c", debug], cwd=tmp_path, capture_output=True, text=True, timeout=120
+        )
+        assert proc.returncode != 0 and "Traceback (most recent call last)" in proc.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("frobnicate",), "invalid choice: 'frobnicate'"),
+        (("show", "--nope"), "unrecognized arguments: --nope"),
+        (("examples", "extra"), "unrecognized arguments: extra"),
+        (("verify", "-k"), "expected one argument"),
+    ],
+    ids=["unknown command", "unknown option", "extra argument", "missing value"],
+)
+def test_usage_error_exits_2(tmp_path: Path, args: tuple[str, ...], fragment: str):
+    proc = symmech(*args, cwd=tmp_path)
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    assert_one_line_error(proc, fragment, "symmech --help")
+
+
+def test_help_lists_every_command(tmp_path: Path):
+    proc = symmech("--help", cwd=tmp_path)
+    assert proc.returncode == 0 and proc.stderr == ""
+    assert proc.stdout.startswith("usage: symmech")
+    for command in ("derive", "show", "examples", "verify", "export"):
+        assert re.search(rf"^    {command} ", proc.stdout, re.M), command
