@@ -29,6 +29,17 @@ from symmech.scenefile import (
 
 __version__ = "0.1.0"
 
+_LAZY = ("codegen",)
+
+
+def __getattr__(name: str) -> object:
+    """``symmech.codegen`` is imported on first use (it loads jinja2 and ctypes)."""
+    if name in _LAZY:
+        import importlib
+
+        return importlib.import_module(f"symmech.{name}")
+    raise AttributeError(f"module 'symmech' has no attribute {name!r}")
+
 __all__ = [
     "ExpressionError",
     "ImpactError",
@@ -40,6 +51,7 @@ __all__ = [
     "Wall",
     "__version__",
     "bracket_rank",
+    "codegen",
     "coordinates",
     "dump_scene",
     "hat",

@@ -3,7 +3,7 @@
 Commands:
 
 ``symmech derive [SCENE] [--emit c|numpy ...] [-o DIR]``
-    Derive the scene and emit its code (:func:`symmech.codegen.emit`) into DIR; print the
+    Derive the scene and emit its code (:func:`symmech.codegen.generate`) into DIR; print the
     files written.  Default SCENE: the bouncing ellipse; default target: c; default DIR:
     ``<scene>_<target>`` in the current folder (with several ``--emit``, one sub-folder per
     target inside ``-o DIR``).
@@ -617,6 +617,7 @@ def _derive(
     targets: Sequence[str],
     out: str | None,
     progress: Callable[[str], None],
+    strategy: str = "auto",
 ) -> list[Path]:
     progress(f"loading scene {spec}")
     scene = resolve_scene(spec).scene
@@ -641,10 +642,9 @@ def _derive(
             folder = Path(out) / target
         else:
             folder = Path(out)
-        progress(f"generating {target} code into {folder}")
-        folder.mkdir(parents=True, exist_ok=True)
-        paths = codegen.emit(scene, target, folder)
-        written.extend(Path(p) for p in paths)
+        progress(f"generating {target} code ({strategy} strategy) into {folder}")
+        code = codegen.generate(scene, target, strategy=strategy)
+        written.extend(code.write(folder))
     return written
 
 
@@ -692,6 +692,14 @@ def _parser() -> argparse.ArgumentParser:
         help="code to emit: c (default) or numpy; repeat for both",
     )
     derive.add_argument("-o", "--output", help="output folder (default: <scene>_<target>)")
+    derive.add_argument(
+        "--strategy",
+        choices=("auto", "closed_form", "linear_solve"),
+        default="auto",
+        help="closed_form evaluates the symbolic solutions; linear_solve solves g v_dot = f"
+        " (and the constraint and impact systems) in the generated code; auto: closed form"
+        " up to 3 coordinates",
+    )
 
     show = sub.add_parser("show", parents=[common], help="print a scene's derived quantities")
     show.add_argument("scene", nargs="?", default=DEFAULT_SCENE, help="scene file or name")
@@ -730,7 +738,7 @@ def _run(args: argparse.Namespace, progress: _Progress) -> int:
     spec = getattr(args, "scene", DEFAULT_SCENE)
     if command == "derive":
         targets = args.emit or ["c"]
-        paths = _derive(spec, targets, args.output, progress)
+        paths = _derive(spec, targets, args.output, progress, args.strategy)
         for p in paths:
             print(p)
         progress(f"done: {len(paths)} files")

@@ -19,6 +19,7 @@ from pathlib import Path
 import pytest
 import sympy as sp
 
+from symmech.examples import EXAMPLES
 from symmech.scenefile import loads_scene, read_scene
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -403,3 +404,97 @@ def test_help_lists_every_command(tmp_path: Path):
     assert proc.stdout.startswith("usage: symmech")
     for command in ("derive", "show", "examples", "verify", "export"):
         assert re.search(rf"^    {command} ", proc.stdout, re.M), command
+
+
+# ----------------------------------------------------------------------------- derive
+
+
+def _compile_and_import(folder: Path, stem: str) -> None:
+    """The emitted C compiles with strict warnings and the NumPy module imports."""
+    import shutil
+
+    cc = shutil.which("gcc")
+    assert cc, "gcc is required to check the emitted C"
+    c_dir, py_dir = folder / "c", folder / "numpy"
+    proc = subprocess.run(
+        [
+            cc,
+            "-std=c99",
+            "-O2",
+            "-Wall",
+            "-Wextra",
+            "-Werror",
+            "-pedantic",
+            "-c",
+            f"{stem}.c",
+            "-o",
+            f"{stem}.o",
+        ],
+        cwd=c_dir,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+    check = (
+        "import importlib.util, sys\n"
+        f"spec = importlib.util.spec_from_file_location('m', {str(py_dir / (stem + '.py'))!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
+        "print(m.N)\n"
+    )
+    run = subprocess.run([sys.executable, "-c", check], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+
+
+@pytest.mark.parametrize("name", sorted(EXAMPLES))
+def test_derive_every_builtin_scene_compiles_and_imports(tmp_path: Path, name: str):
+    out = tmp_path / "out"
+    proc = symmech("derive", name, "--emit", "c", "--emit", "numpy", "-o", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    printed = set(proc.stdout.split())
+    stem = f"symmech_{name}"
+    for f in (f"c/{stem}.c", f"c/{stem}.h", f"numpy/{stem}.py"):
+        assert str(out / f) in printed, f
+    assert re.search(r"generating c code", proc.stderr)
+    _compile_and_import(out, stem)
+
+
+def test_derive_without_a_scene_emits_the_bouncing_ellipse_in_c(tmp_path: Path):
+    proc = symmech("derive", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    folder = tmp_path / "bouncing_ellipse_c"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "symmech_bouncing_ellipse.c",
+        "symmech_bouncing_ellipse.h",
+    ]
+    assert "hypot(" in (folder / "symmech_bouncing_ellipse.c").read_text()
+
+
+def test_derive_a_scene_file_with_a_strategy(tmp_path: Path):
+    scene = tmp_path / "oscillator.toml"
+    scene.write_text(
+        'coordinates = ["x", "y"]\n'
+        'metric = [["m + c", "c"], ["c", "m + c"]]\n'
+        'potential = "k*(x**2 + y**2)/2"\n'
+        "[parameters]\nm = 2\nc = 0.5\nk = 1\n"
+    )
+    proc = symmech(
+        "derive",
+        str(scene),
+        "--strategy",
+        "linear_solve",
+        "--emit",
+        "numpy",
+        "-o",
+        "gen",
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    text = (tmp_path / "gen" / "symmech_oscillator.py").read_text()
+    assert "_spd_solve" in text and "Strategy: linear_solve" in text
+
+
+def test_derive_refuses_an_unknown_strategy(tmp_path: Path):
+    proc = symmech("derive", "car", "--strategy", "fastest", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "invalid choice" in proc.stderr

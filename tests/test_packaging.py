@@ -4,11 +4,14 @@ and the layers import only to their left."""
 from __future__ import annotations
 
 import ast
+import os
 import subprocess
 import sys
 import tomllib
 import zipfile
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "symmech"
@@ -90,15 +93,22 @@ def test_import_pulls_only_core_dependencies():
     assert {"sympy", "numpy", "mpmath"} <= loaded
 
 
-def test_wheel_ships_templates(tmp_path):
-    """Build the wheel and check the top-level templates/ folder is inside it."""
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    """The wheel built from this checkout (pip wheel, no dependencies)."""
+    out = tmp_path_factory.mktemp("wheel")
     proc = subprocess.run(
-        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(tmp_path), str(ROOT)],
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(out), str(ROOT)],
         capture_output=True,
         text=True,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
-    (wheel,) = tmp_path.glob("symmech-*.whl")
+    (built,) = out.glob("symmech-*.whl")
+    return built
+
+
+def test_wheel_ships_templates(wheel):
+    """The top-level templates/ folder is inside the wheel."""
     names = zipfile.ZipFile(wheel).namelist()
     assert "symmech/templates/README.md" in names
     assert "symmech/templates/__init__.py" in names
@@ -107,3 +117,37 @@ def test_wheel_ships_templates(tmp_path):
     )
     for t in templates:
         assert "symmech/" + t in names, f"{t} missing from the wheel"
+
+
+def test_generation_works_from_an_installed_wheel(wheel, tmp_path):
+    """Install the wheel (not editable) into a bare folder, then generate, compile, load
+    and call C and NumPy code from there, outside the checkout."""
+    target = tmp_path / "site"
+    proc = subprocess.run(
+        [sys.executable, "-m", "pip", "install", "--no-deps", "--target", str(target), str(wheel)],
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    script = """
+import sys, symmech
+from pathlib import Path
+here = Path(symmech.__file__).resolve()
+assert here.is_relative_to(Path(sys.argv[1]).resolve()), here
+from symmech.examples import carnot_3_7
+for target in ("c", "numpy"):
+    mod = symmech.codegen.generate(carnot_3_7(), target).load()
+    out = mod.impact([0, 1.0, 0], [1.0, -2.0, 0.0], [1.0, 0.5, 1.0, 2.0])
+    assert [round(float(x), 12) for x in out] == [0.5, 1.0, 0.5], out
+print("ok")
+"""
+    env = dict(os.environ, PYTHONPATH=str(target), SYMMECH_CACHE_DIR=str(tmp_path / "cache"))
+    run = subprocess.run(
+        [sys.executable, "-c", script, str(target)],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert run.stdout.strip() == "ok"

@@ -85,6 +85,7 @@ class LoweredFunction:
     out_size: int
     operations: int
     n_temporaries: int
+    expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
 
 
 def _unpack_entries(names: Names, used: set[str]) -> tuple[tuple[str, int, str], ...]:
@@ -200,4 +201,5 @@ def lower(
         out_size=f.out_size,
         operations=int(ops),
         n_temporaries=len(replacements),
+        expressions=tuple(e for _, e in replacements) + tuple(final),
     )

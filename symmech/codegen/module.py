@@ -25,6 +25,7 @@ import ctypes
 import hashlib
 import importlib.util
 import sys
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -239,17 +240,20 @@ def _numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
     return call
 
 
-def _c_raw(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_inputs: int) -> Raw:
+def _c_raw(
+    lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_inputs: int, n_parameters: int
+) -> Raw:
     single = getattr(lib, prefix + spec.name)
     batch = getattr(lib, prefix + spec.name + "_batch")
     ptr, dbl = ctypes.c_void_p, ctypes.c_double
     nstate = len(spec.state)
+    dbls = ctypes.POINTER(ctypes.c_double)
     single.argtypes = (
-        [ptr] * nstate
-        + ([ptr] if spec.takes_parameters else [])
+        [dbls] * nstate
+        + ([dbls] if spec.takes_parameters else [])
         + ([dbl] if spec.takes_time else [])
-        + ([ptr] if spec.takes_inputs else [])
-        + [ptr]
+        + ([dbls] if spec.takes_inputs else [])
+        + [dbls]
     )
     single.restype = ctypes.c_int
     batch.argtypes = (
@@ -264,6 +268,40 @@ def _c_raw(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_input
     out_shape = spec.out_shape
     out_size = spec.out_size
     sizes = [2 * n if s == "y" else n for s in spec.state]
+    local = threading.local()
+
+    def buffers() -> tuple[list, list]:
+        """Per-thread ctypes buffers for one state, and numpy views on them (ctypes
+        releases the GIL during the call, so threads must not share them)."""
+        b = getattr(local, "buffers", None)
+        if b is None:
+            cbufs = [(ctypes.c_double * k)() for k in sizes]
+            cbufs.append((ctypes.c_double * max(n_parameters, 1))())
+            cbufs.append((ctypes.c_double * max(n_inputs, 1))())
+            cbufs.append((ctypes.c_double * max(out_size, 1))())
+            views = [np.frombuffer(c, dtype=np.float64) for c in cbufs]
+            b = local.buffers = (cbufs, views)
+        return b
+
+    def call_single(state, p, t, u) -> np.ndarray:
+        cbufs, views = buffers()
+        args: list = []
+        for i, a in enumerate(state):
+            views[i][:] = a
+            args.append(cbufs[i])
+        if spec.takes_parameters:
+            views[-3][:] = p
+            args.append(cbufs[-3])
+        if spec.takes_time:
+            args.append(float(t))
+        if spec.takes_inputs:
+            views[-2][:] = u
+            args.append(cbufs[-2])
+        args.append(cbufs[-1])
+        status = single(*args)
+        if status:
+            raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
+        return views[-1][:out_size].reshape(out_shape).copy()
 
     def call(state, p, t, u):
         if p is not None and p.ndim != 1:
@@ -271,28 +309,18 @@ def _c_raw(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_input
                 f"{spec.name}: the C backend shares one parameter vector across a batch;"
                 f" got params of shape {p.shape}"
             )
+        if (
+            all(a.ndim == 1 for a in state)
+            and (t is None or t.ndim == 0)
+            and (u is None or u.ndim == 1)
+        ):
+            return call_single(state, p, t, u)
         parts = [a.shape[:-1] for a in state]
         if t is not None:
             parts.append(t.shape)
         if u is not None:
             parts.append(u.shape[:-1])
         lead = np.broadcast_shapes(*parts)
-        if lead == ():
-            arrays = [np.ascontiguousarray(a) for a in state]
-            args: list = [a.ctypes.data for a in arrays]
-            if spec.takes_parameters:
-                args.append(p.ctypes.data)
-            if spec.takes_time:
-                args.append(float(t))
-            if spec.takes_inputs:
-                uu = np.ascontiguousarray(u)
-                args.append(uu.ctypes.data)
-            out = np.empty(out_shape)
-            args.append(out.ctypes.data)
-            status = single(*args)
-            if status:
-                raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
-            return out
         count = int(np.prod(lead))
         arrays = [
             np.ascontiguousarray(np.broadcast_to(a, (*lead, k)).reshape(count, k))
@@ -316,17 +344,16 @@ def _c_raw(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_input
         if first:
             # re-run the failing state alone to learn why
             i = first - 1
-            single_args = [a[i].ctypes.data for a in arrays]
-            if spec.takes_parameters:
-                single_args.append(p.ctypes.data)
-            if spec.takes_time:
-                single_args.append(float(tt[i]))
-            if spec.takes_inputs:
-                single_args.append(np.ascontiguousarray(uu[i]).ctypes.data)
-            scratch = np.empty(out_size)
-            single_args.append(scratch.ctypes.data)
-            status = single(*single_args)
-            raise _failed(spec.name, i, _STATUS.get(status, f"status {status}"))
+            try:
+                call_single(
+                    [a[i] for a in arrays],
+                    p,
+                    tt[i] if spec.takes_time else None,
+                    uu[i] if spec.takes_inputs else None,
+                )
+            except NumericalError as exc:
+                raise _failed(spec.name, i, str(exc).split(": ", 1)[1]) from None
+            raise _failed(spec.name, i, "failed in the batch call only")
         return out.reshape((*lead, *out_shape))
 
     return call
@@ -370,7 +397,8 @@ def load_generated(
     lib = load_library(library)
     prefix = f"{code.stem}_"
     n_inputs = len(code.plan.inputs)
-    raw = {f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs) for f in code.functions}
+    n_par = len(code.plan.parameters)
+    raw = {f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs, n_par) for f in code.functions}
     module = SceneModule(code, raw, library)
     module._library = lib  # keep the library alive as long as the module
     return module

@@ -37,6 +37,7 @@ from sympy.core.function import AppliedUndef
 
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
+from symmech.impacts.stability import stable_coefficient
 
 if TYPE_CHECKING:
     from symmech.scene import Scene
@@ -77,6 +78,10 @@ FUNCTIONS = (
 #: Above this number of coordinates the default strategy is ``linear_solve``.
 CLOSED_FORM_MAX_N = 3
 
+#: Velocity-free entries up to this many operations are put in the stable form of
+#: :func:`symmech.impacts.stability.stable_coefficient` before code generation.
+STABLE_ENTRY_MAX_OPS = 200
+
 
 class CodegenError(SymmechError, ValueError):
     """Code cannot be generated as asked (bad option, unsupported expression, ...)."""
@@ -100,7 +105,8 @@ class FunctionPlan:
     """One generated function.
 
     ``state`` is the tuple of state arguments it takes, among ``"q"``, ``"v"`` and
-    ``"y"`` (``y = (q, v)`` for ``rhs``); ``uses_time`` / ``uses_inputs`` /
+    ``"y"`` (``y = (q, v)`` for ``rhs``); ``step_args`` are the sizes of the step and, last,
+    1 when the metric is structurally diagonal (0 otherwise); ``uses_time`` / ``uses_inputs`` /
     ``uses_parameters`` say whether ``t``, the inputs ``u`` and the run-time parameters
     ``p`` appear.  The function evaluates ``blocks`` and then either returns the block
     named ``"out"`` (``step is None``) or runs ``step`` on the blocks (``step_args`` are
@@ -281,9 +287,24 @@ def build_plan(
     omitted: list[str] = []
     plans: list[FunctionPlan] = []
 
+    state = (*q, TIME)
+    velocity_set = set(v)
+
     def prepare(e: sp.Expr) -> sp.Expr:
+        """Inputs and constants substituted; a velocity-free entry (metric, gradients,
+        one-forms, projectors) in stable form: numerator and denominator factored, so a
+        difference such as a^2 - b^2 is evaluated as (a - b)(a + b), without cancellation
+        (see :mod:`symmech.impacts.stability`).  Velocity-dependent entries keep their
+        structure (the sparse forcing, the stable impact maps)."""
         e = inputs.substitute(e)
-        return e.xreplace(baked) if baked else e
+        e = e.xreplace(baked) if baked else e
+        if (
+            not e.is_number
+            and not (e.free_symbols & velocity_set)
+            and sp.count_ops(e) <= STABLE_ENTRY_MAX_OPS
+        ):
+            e = stable_coefficient(e, state)
+        return e
 
     def add(
         name: str,
@@ -332,6 +353,8 @@ def build_plan(
 
     M = sp.Matrix(scene.mass_matrix())
     f = sp.Matrix(scene.forcing())
+    # a structurally diagonal metric is factored by its square roots, not by Cholesky loops
+    diag = int(all(M[i, j] == 0 for i in range(n) for j in range(n) if i != j))
     mu = sp.Matrix(scene.constraint_matrix)
     closed = strategy == "closed_form"
 
@@ -383,7 +406,7 @@ def build_plan(
                 ],
                 (n,),
                 step="constrained_acceleration",
-                step_args=(n, m),
+                step_args=(n, m, diag),
             )
         else:
             add(
@@ -395,7 +418,7 @@ def build_plan(
                 [_matrix_block("M", M), _matrix_block("f", f)],
                 (n,),
                 step="spd_solve",
-                step_args=(n, 1),
+                step_args=(n, diag),
             )
     if "rhs" in wanted:
         qdot = sp.Matrix(scene.kinematics())
@@ -449,7 +472,7 @@ def build_plan(
                     ],
                     (m,),
                     step="constrained_multipliers",
-                    step_args=(n, m),
+                    step_args=(n, m, diag),
                 )
         if "constraint_residual" in wanted:
             add(
@@ -554,7 +577,7 @@ def build_plan(
                     ],
                     (n,),
                     step="impact_kkt",
-                    step_args=(n, k, m),
+                    step_args=(n, k, m, diag),
                     wall=wname,
                 )
     if not scene.walls:

@@ -78,7 +78,7 @@ def _perfect_square_root(term: sp.Expr) -> sp.Expr | None:
 
 
 def _hypot_query(e: sp.Expr) -> bool:
-    if not (e.is_Pow and e.exp == sp.S.Half and isinstance(e.base, sp.Add)):
+    if not (e.is_Pow and e.exp in (sp.S.Half, -sp.S.Half) and isinstance(e.base, sp.Add)):
         return False
     if len(e.base.args) != 2:
         return False
@@ -87,18 +87,30 @@ def _hypot_query(e: sp.Expr) -> bool:
 
 def _hypot_value(e: sp.Expr) -> sp.Expr:
     a, b = (_perfect_square_root(x) for x in e.base.args)
-    return hypot(a, b)
+    return hypot(a, b) if e.exp > 0 else 1 / hypot(a, b)
 
 
 _hypot_opt = ReplaceOptim(_hypot_query, _hypot_value)
 
 
 def safe_rewrite(expr: sp.Expr) -> sp.Expr:
-    """``exp(x) - 1 -> expm1(x)``, ``log(1 + x) -> log1p(x)``, ``sqrt(a^2 + b^2) -> hypot``."""
+    """``exp(x) - 1 -> expm1(x)``, ``log(1 + x) -> log1p(x)``, ``sqrt(a^2 + b^2) -> hypot``.
+
+    Each rewrite runs only when its function occurs: sympy's ``expm1`` optimisation calls
+    ``factor`` on the whole expression, which takes minutes on a multibody forcing term.
+    """
     expr = sp.sympify(expr)
     if expr.is_Atom:
         return expr
-    return optimize(expr, (*optims_c99[:2], _hypot_opt))
+    expm1_opt, log1p_opt = optims_c99[:2]
+    optims = []
+    if expr.has(sp.exp):
+        optims.append(expm1_opt)
+    if expr.has(sp.log):
+        optims.append(log1p_opt)
+    if any(p.exp in (sp.S.Half, -sp.S.Half) for p in expr.atoms(sp.Pow)):
+        optims.append(_hypot_opt)
+    return optimize(expr, optims) if optims else expr
 
 
 def _float_literal(value: sp.Expr) -> str:

@@ -1,0 +1,398 @@
+"""Code generation: what is emitted, how it compiles, golden files, errors.
+
+Numerical agreement with independent references is in ``test_codegen_numerics.py``.
+Compile tests need a C compiler; CI has gcc.  Without one they fail with a message saying
+so (they are never skipped silently).
+"""
+
+from __future__ import annotations
+
+import difflib
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import symmech as sm
+from symmech import codegen
+from symmech.codegen.backends import environment
+from symmech.examples import (
+    EXAMPLES,
+    bouncing_ellipse,
+    carnot_3_7,
+    carnot_3_13,
+    carnot_4_4,
+    example,
+    pendulum_on_cart,
+)
+
+GOLDEN = Path(__file__).parent / "golden"
+STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+
+
+def _gcc() -> str:
+    cc = shutil.which("gcc")
+    assert cc, "gcc is required by the code-generation tests (install gcc)"
+    return cc
+
+
+# ------------------------------------------------------------------------ compilation
+
+
+@pytest.mark.parametrize("name", sorted(EXAMPLES))
+@pytest.mark.parametrize("strategy", ["auto", "linear_solve"])
+def test_generated_c_compiles_with_strict_warnings(tmp_path, name, strategy):
+    code = codegen.generate(example(name), "c", strategy=strategy, projectors=True)
+    code.write(tmp_path)
+    proc = subprocess.run(
+        [_gcc(), *STRICT, "-c", f"{code.stem}.c", "-o", "out.o"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+
+
+def _driver(code: codegen.GeneratedCode, count: int) -> str:
+    """A C main() calling every batch function on `count` pseudo-random states."""
+    plan = code.plan
+    n, npar, nin = plan.n, len(plan.parameters), len(plan.inputs)
+    lines = [
+        "#include <stdio.h>",
+        "#include <stdlib.h>",
+        f'#include "{code.stem}.h"',
+        "static double rnd(unsigned *s) { *s = *s * 1103515245u + 12345u;"
+        " return 0.4 + 1.2 * (double)((*s >> 8) & 0xffff) / 65535.0; }",
+        "int main(void) {",
+        "    unsigned seed = 12345u;",
+        f"    enum {{ N = {count} }};",
+        f"    double *q = malloc(sizeof(double) * N * {n});",
+        f"    double *v = malloc(sizeof(double) * N * {n});",
+        f"    double *y = malloc(sizeof(double) * N * {2 * n});",
+        "    double *t = malloc(sizeof(double) * N);",
+        f"    double *u = malloc(sizeof(double) * N * {max(nin, 1)});",
+        f"    double p[{max(npar, 1)}];",
+        "    long failures = 0;",
+        f"    for (int i = 0; i < N * {n}; ++i) {{ q[i] = rnd(&seed); v[i] = rnd(&seed) - 1.0; }}",
+        f"    for (int i = 0; i < N; ++i) {{ t[i] = rnd(&seed);"
+        f" for (int j = 0; j < {n}; ++j) {{ y[i*{2 * n} + j] = q[i*{n} + j];"
+        f" y[i*{2 * n} + {n} + j] = v[i*{n} + j]; }} }}",
+        f"    for (int i = 0; i < N * {max(nin, 1)}; ++i) u[i] = rnd(&seed) - 1.0;",
+        f"    for (int i = 0; i < {max(npar, 1)}; ++i) p[i] = 0.5 + 0.1 * i;",
+    ]
+    for f in code.functions:
+        args = ["N"]
+        args += ["y"] if f.state == ("y",) else list(f.state)
+        if f.takes_parameters:
+            args.append("p")
+        if f.takes_time:
+            args.append("t")
+        if f.takes_inputs:
+            args.append("u")
+        lines += [
+            "    {",
+            f"        double *out = malloc(sizeof(double) * N * {f.out_size});",
+            f"        long r = {code.stem}_{f.name}_batch({', '.join(args)}, out);",
+            f'        if (r) {{ failures++; fprintf(stderr, "{f.name} failed at %ld\\n", r); }}',
+            "        free(out);",
+            "    }",
+        ]
+    lines += [
+        "    free(q); free(v); free(y); free(t); free(u);",
+        '    printf("checked\\n");',
+        "    return failures ? 3 : 0;",
+        "}",
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def test_batch_calls_are_clean_under_address_and_undefined_sanitizers(tmp_path):
+    """Every batch function of a constrained, moving-wall, linear-solve scene (carnot_4_4:
+    Cholesky, constrained solve, KKT impact, inputs) runs clean under ASan + UBSan."""
+    code = codegen.generate(carnot_4_4(), "c", strategy="linear_solve", projectors=True)
+    code.write(tmp_path)
+    (tmp_path / "driver.c").write_text(_driver(code, 257))
+    exe = tmp_path / "driver"
+    flags = ["-std=c99", "-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all"]
+    proc = subprocess.run(
+        [_gcc(), *flags, "-o", str(exe), "driver.c", f"{code.stem}.c", "-lm"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
+    run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert run.stdout.strip() == "checked"
+    assert "runtime error" not in run.stderr and "AddressSanitizer" not in run.stderr
+
+
+# ------------------------------------------------------------------ only what is needed
+
+
+def test_unconstrained_static_scene_has_no_constraint_impact_solver_or_time_code():
+    code = codegen.generate(bouncing_ellipse(), "c")
+    src = code.files["symmech_bouncing_ellipse.c"]
+    names = {f.name for f in code.functions}
+    assert names == {
+        "mass_matrix",
+        "forcing",
+        "acceleration",
+        "rhs",
+        "energy",
+        "psi_wall",
+        "dpsi_wall",
+        "impact_wall",
+    }
+    for absent in ("sm_constrained", "sm_impact_kkt", "sm_cholesky", "const double *u"):
+        assert absent not in src, absent
+    assert not re.search(r"double t[,)]", src), "a time argument"
+    omitted = " ".join(code.omitted)
+    assert "no constraints" in omitted and "V = 0" in omitted and "nothing depends on t" in omitted
+    header = code.files["symmech_bouncing_ellipse.h"]
+    assert "Left out of this file" in header and "no constraints" in header
+    # V = 0 and a constant metric: the forcing is identically zero, no operation emitted
+    assert code.operation_counts()["forcing"] == 0
+
+
+def test_scene_without_walls_has_no_impact_code():
+    code = codegen.generate(pendulum_on_cart(2), "c")
+    assert not any(f.kind in ("impact", "psi", "dpsi") for f in code.functions)
+    assert "no walls" in " ".join(code.omitted)
+    assert "sm_impact_kkt" not in code.files["symmech_pendulum_on_cart_2.c"]
+
+
+def test_moving_wall_takes_inputs_not_time():
+    """psi = x - f(t): f(t) and f'(t) are run-time inputs; nothing else needs t."""
+    code = codegen.generate(carnot_4_4(), "c")
+    assert [str(a) for _, a in code.plan.inputs] == ["f(t)", "Derivative(f(t), t)"]
+    by = {f.name: f for f in code.functions}
+    assert by["psi_rough_wall"].takes_inputs and not by["psi_rough_wall"].takes_time
+    assert by["impact_rough_wall"].takes_inputs
+    assert not by["mass_matrix"].takes_inputs and not by["acceleration"].takes_inputs
+    assert not any(f.takes_time for f in code.functions)
+
+
+def test_definitions_turn_inputs_into_time():
+    f = sp.Function("f", real=True)
+    code = codegen.generate(carnot_4_4(), "numpy", definitions={f: sp.sin(2 * sm.t)})
+    by = {fn.name: fn for fn in code.functions}
+    assert not code.plan.inputs
+    assert by["psi_rough_wall"].takes_time and by["impact_rough_wall"].takes_time
+    mod = code.load()
+    q = np.array([0.3, 0, 0.1, 0.2, 1.0, 0.4])
+    assert mod.psi(q, [0.4, 0.5, 0.7], t=0.25) == pytest.approx(0.3 - np.sin(0.5), rel=1e-15)
+
+
+def test_constants_are_folded_and_leave_the_parameter_list():
+    code = codegen.generate(carnot_3_7(), "c", constants={"m": 2, "alpha": sp.Rational(1, 2)})
+    assert [str(p) for p in code.plan.parameters] == ["R", "k"]
+    src = code.files["symmech_carnot_3_7.c"]
+    assert "p_m" not in src and "p_alpha" not in src
+    assert "-0.5*v_ydot" in src.replace(" ", "")  # y_dot+ = -alpha y_dot, alpha = 1/2 folded
+    mod = code.load()
+    np.testing.assert_allclose(
+        mod.impact([0, 1.0, 0], [1.0, -2.0, 0.0], [1.0, 1.0]), [0.5, 1.0, 0.5], rtol=1e-15
+    )
+
+
+@pytest.mark.parametrize(
+    ("constants", "fragment"),
+    [
+        ({"nope": 1}, "not a parameter"),
+        ({"m": -1}, "declared positive"),
+        ({"m": "2"}, "is not a real number"),
+        ({"m": sp.oo}, "not a finite real number"),
+        ({"m": True}, "not a real number"),
+    ],
+)
+def test_bad_constants_are_refused(constants, fragment):
+    with pytest.raises(codegen.CodegenError, match=fragment):
+        codegen.generate(carnot_3_7(), "c", constants=constants)
+
+
+def test_bad_options_are_refused():
+    with pytest.raises(codegen.CodegenError, match="target must be one of"):
+        codegen.generate(carnot_3_7(), "fortran")
+    with pytest.raises(codegen.CodegenError, match="strategy must be one of"):
+        codegen.generate(carnot_3_7(), "c", strategy="fast")
+    with pytest.raises(codegen.CodegenError, match="unknown"):
+        codegen.generate(carnot_3_7(), "c", functions=["acceleration", "jerk"])
+
+
+def test_functions_option_restricts_what_is_emitted():
+    code = codegen.generate(carnot_3_13(), "c", functions=["impact", "psi"])
+    assert {f.kind for f in code.functions} == {"impact", "psi"}
+    rhs_only = codegen.generate(carnot_3_7(), "c", functions=["rhs"])
+    assert {f.name for f in rhs_only.functions} == {"acceleration", "rhs"}
+    assert any("rhs calls it" in o for o in rhs_only.omitted)
+
+
+# ------------------------------------------------------------------ printing conventions
+
+
+def test_hostile_identifiers_compile_and_compute(tmp_path):
+    """Symbol names that are C/Python keywords, libm names or LaTeX must all work."""
+    x, y = sm.coordinates("x y")
+    Ixx, lam, dbl, pw, same = sp.symbols("I_{xx} lambda double pow I_xx", positive=True)
+    scene = sm.Scene(
+        (x, y),
+        metric=sp.diag(Ixx + same, lam),
+        potential=dbl * x**2 / 2 + pw * y,
+        walls=[sm.Wall(y, restitution=sp.Rational(1, 2), name="int")],
+        name="for",
+    )
+    for target in ("c", "numpy"):
+        code = codegen.generate(scene, target)
+        if target == "c":
+            code.write(tmp_path)
+            proc = subprocess.run(
+                [_gcc(), *STRICT, "-c", f"{code.stem}.c"],
+                cwd=tmp_path,
+                capture_output=True,
+                text=True,
+            )
+            assert proc.returncode == 0, proc.stderr
+        mod = code.load()
+        values = dict(zip(mod.parameters, [1.5, 0.25, 2.0, 3.0, 0.5], strict=True))
+        # parameters are sorted by name: I_xx, I_{xx}, double, lambda, pow
+        assert mod.parameters == ("I_xx", "I_{xx}", "double", "lambda", "pow")
+        acc = mod.acceleration([0.4, 1.0], [0.0, 0.0], values)
+        np.testing.assert_allclose(acc, [-2.0 * 0.4 / 1.75, -0.5 / 3.0], rtol=1e-15)
+        np.testing.assert_allclose(mod.impact([0.4, 0.0], [1.0, -2.0], values), [1.0, 1.0])
+
+
+def test_printing_is_float64_safe():
+    src = codegen.generate(bouncing_ellipse(), "c").files["symmech_bouncing_ellipse.c"]
+    assert "hypot(" in src  # the support function sqrt(a^2 cos^2 + b^2 sin^2)
+    assert "pow(" not in src  # squares are products
+    assert "M_PI" not in src
+    body = "\n".join(line for line in src.splitlines() if not line.lstrip().startswith("*"))
+    assert not re.search(r"(?<![\w.])\d+/\d+(?![\w.])", body), "integer division"
+    numpy_src = codegen.generate(pendulum_on_cart(2), "numpy").files[
+        "symmech_pendulum_on_cart_2.py"
+    ]
+    assert "**2" not in numpy_src
+
+
+def test_every_function_header_states_its_cost_and_files_are_stamped():
+    code = codegen.generate(carnot_3_13(), "c")
+    src = code.files["symmech_carnot_3_13.c"]
+    for f in code.functions:
+        assert (
+            f"Operations after CSE: {f.operations} (sympy.count_ops); temporaries:"
+            f" {f.n_temporaries}." in src
+        )
+    for target in ("c", "numpy"):
+        for text in codegen.generate(carnot_3_13(), target).files.values():
+            first = "\n".join(text.splitlines()[:3])
+            assert "Generated by symmech" in first and "do not edit" in first
+
+
+def test_cse_reduces_the_operation_count():
+    scene = pendulum_on_cart(2)
+    with_cse = codegen.generate(scene, "c").operation_counts()
+    without = codegen.generate(scene, "c", cse=False).operation_counts()
+    assert with_cse["forcing"] < without["forcing"]
+    assert with_cse["mass_matrix"] <= without["mass_matrix"]
+
+
+def test_templates_are_strict():
+    env = environment()
+    with pytest.raises(Exception, match="undefined"):
+        env.from_string("{{ missing }}").render()
+
+
+# ------------------------------------------------------------------------ run-time errors
+
+
+def test_loaded_module_checks_its_arguments():
+    mod = codegen.generate(carnot_3_7(), "c").load()
+    q, v, p = [0, 1.0, 0], [1.0, -2.0, 0.0], [1.0, 0.5, 1.0, 2.0]
+    with pytest.raises(codegen.CodegenError, match="params required"):
+        mod.impact(q, v)
+    with pytest.raises(codegen.CodegenError, match="expected 4 values"):
+        mod.impact(q, v, [1.0, 2.0])
+    with pytest.raises(codegen.CodegenError, match=r"missing \['m'\]"):
+        mod.impact(q, v, {"R": 1, "alpha": 0.5, "k": 1})
+    with pytest.raises(codegen.CodegenError, match=r"expected shape \(\.\.\., 3\)"):
+        mod.impact([0, 1.0], v, p)
+    with pytest.raises(codegen.CodegenError, match="no wall named"):
+        mod.impact(q, v, p, wall="floor")
+    with pytest.raises(codegen.CodegenError, match="not generated"):
+        mod.multipliers(q, v, p)
+    moving = codegen.generate(carnot_4_4(), "numpy").load()
+    with pytest.raises(codegen.CodegenError, match="inputs"):
+        moving.psi(np.zeros(6), [0.4, 0.5, 0.7])
+
+
+@pytest.mark.parametrize("target", ["c", "numpy"])
+def test_non_positive_definite_metric_and_nan_raise_numerical_errors(target):
+    """The generated code does not trust the parameters: a metric that a run-time value
+    makes indefinite is caught by the Cholesky factorisation, not returned as garbage."""
+    x, y = sm.coordinates("x y")
+    a = sp.Symbol("a", positive=True)
+    scene = sm.Scene(
+        (x, y), metric=[[2, 1], [1, a + 1]], potential=x * y, name="spd_for_positive_a"
+    )
+    mod = codegen.generate(scene, target, strategy="linear_solve").load()
+    assert np.isfinite(mod.acceleration([0, 0], [1, 1], [0.5])).all()
+    with pytest.raises(codegen.NumericalError, match="positive definite"):
+        mod.acceleration([0, 0], [1, 1], [-0.9])  # det g = 2a + 1 < 0
+    states = np.zeros((4, 2))
+    with pytest.raises(codegen.NumericalError, match="not finite"):
+        mod.energy(states, np.array([[1, 1], [1, 1], [np.nan, 1], [1, 1]]), [0.5])
+
+
+# ---------------------------------------------------------------------------- golden
+
+
+GOLDEN_SCENES = {
+    "bouncing_ellipse": bouncing_ellipse,
+    "carnot_3_7": carnot_3_7,
+    "carnot_4_4": carnot_4_4,
+}
+
+
+@pytest.mark.parametrize("target", ["c", "numpy"])
+@pytest.mark.parametrize("name", sorted(GOLDEN_SCENES))
+def test_golden_files(request, capsys, name, target):
+    """The generated files equal tests/golden/<scene>/; update with --update-golden."""
+    code = codegen.generate(GOLDEN_SCENES[name](), target)
+    folder = GOLDEN / name
+    update = request.config.getoption("--update-golden")
+    for filename, text in code.files.items():
+        path = folder / filename
+        old = path.read_text(encoding="utf-8") if path.is_file() else ""
+        if update:
+            if old != text:
+                diff = difflib.unified_diff(
+                    old.splitlines(keepends=True),
+                    text.splitlines(keepends=True),
+                    f"a/{path.relative_to(GOLDEN.parent)}",
+                    f"b/{path.relative_to(GOLDEN.parent)}",
+                )
+                with capsys.disabled():
+                    print("".join(diff))
+                folder.mkdir(parents=True, exist_ok=True)
+                path.write_text(text, encoding="utf-8")
+            continue
+        assert path.is_file(), f"{path} is missing; run pytest --update-golden"
+        if old != text:
+            diff = "".join(
+                list(
+                    difflib.unified_diff(
+                        old.splitlines(keepends=True),
+                        text.splitlines(keepends=True),
+                        str(path),
+                        "generated",
+                    )
+                )[:80]
+            )
+            pytest.fail(
+                f"{path.name} differs from its golden file (pytest --update-golden):\n{diff}"
+            )
