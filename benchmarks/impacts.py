@@ -19,7 +19,7 @@ import sympy as sp
 
 import symmech as sm
 from symmech.declaration import shapes
-from symmech.impacts import derive_impact_map
+from symmech.impacts import derive_impact_map, kkt_post_velocity
 
 k, r, m, I, a, b = sp.symbols("k r m I a b", positive=True)
 alpha = sp.Symbol("alpha", nonnegative=True)
@@ -82,9 +82,28 @@ def run(name: str, build: Callable[[], sm.Scene]) -> tuple:
     carnot = time.perf_counter() - t0
     assert sp.simplify(result.residual) == 0, result
     raw = derive_impact_map(build().declaration, 0, simplify="none")
+    # baseline: the impulse-momentum (KKT) system of the same impact, solved symbolically
+    # by sympy.linsolve for a symbolic pre-impact velocity in D (route B of the tests)
+    decl = scene.declaration
+    wall = scene.walls[0]
+    v = sp.Matrix(scene.velocities)
+    t0 = time.perf_counter()
+    kkt = kkt_post_velocity(
+        decl.metric,
+        decl.constraint_matrix,
+        imp.dpsi,
+        wall.impulsive_matrix,
+        sp.Matrix(imp.projectors.P) * v,
+        wall.restitution,
+        imp.psi_t,
+    )
+    kkt_time = time.perf_counter() - t0
+    check = (kkt - imp.apply(list(sp.Matrix(imp.projectors.P) * v))).applyfunc(sp.cancel)
+    assert all(sp.simplify(e) == 0 for e in check), "KKT and closed form differ"
     return (
         name,
         derive,
+        kkt_time,
         carnot,
         result.theorem,
         ops(raw.post_velocity),
@@ -104,16 +123,24 @@ def main() -> None:
         run("text 001 3.1 (bouncing ellipse)", ellipse_scene),
     ]
     head = (
-        f"{'case':36s} {'derive [s]':>10s} {'carnot [s]':>10s}  {'theorem':26s}"
-        f" {'ops v+ raw':>10s} {'ops v+':>7s} {'ops M,o raw':>11s} {'ops M,o':>8s}"
+        f"{'case':36s} {'derive [s]':>10s} {'KKT [s]':>8s} {'KKT/der':>7s} {'carnot [s]':>10s}"
+        f"  {'theorem':26s} {'ops v+ raw':>10s} {'ops v+':>7s} {'ops M,o raw':>11s}"
+        f" {'ops M,o':>8s}"
     )
     print(head)
     print("-" * len(head))
-    for name, derive, carnot, theorem, pr, ps, mr, ms in rows:
+    for name, derive, kkt, carnot, theorem, pr, ps, mr, ms in rows:
         print(
-            f"{name:36s} {derive:10.2f} {carnot:10.2f}  {theorem:26s}"
-            f" {pr:10d} {ps:7d} {mr:11d} {ms:8d}"
+            f"{name:36s} {derive:10.2f} {kkt:8.2f} {kkt / derive:7.1f} {carnot:10.2f}"
+            f"  {theorem:26s} {pr:10d} {ps:7d} {mr:11d} {ms:8d}"
         )
+    print(
+        "\nderive: declaration to the complete impact map (fresh scene, nothing cached);"
+        " KKT: sympy.linsolve of the\nimpulse-momentum system of the same impact for a"
+        " symbolic velocity in D (the baseline), checked equal\nto the closed form;"
+        " carnot: the Carnot residual; ops: sympy.count_ops before (raw) and after the"
+        " stabilising simplification."
+    )
 
 
 if __name__ == "__main__":
