@@ -40,6 +40,7 @@ def __getattr__(name: str) -> object:
         return importlib.import_module(f"symmech.{name}")
     raise AttributeError(f"module 'symmech' has no attribute {name!r}")
 
+
 __all__ = [
     "ExpressionError",
     "ImpactError",

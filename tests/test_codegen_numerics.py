@@ -378,8 +378,11 @@ def test_stable_forms_survive_code_generation(target):
     got = mod.dpsi([0.0, 0.0, th], params)[2]
     with mp.workdps(DPS):
         A, B, T = mp.mpf(a), mp.mpf(b), mp.mpf(th)
-        exact = (A**2 - B**2) * mp.sin(T) * mp.cos(T) / mp.sqrt(
-            A**2 * mp.cos(T) ** 2 + B**2 * mp.sin(T) ** 2
+        exact = (
+            (A**2 - B**2)
+            * mp.sin(T)
+            * mp.cos(T)
+            / mp.sqrt(A**2 * mp.cos(T) ** 2 + B**2 * mp.sin(T) ** 2)
         )
         rel = abs((mp.mpf(got) - exact) / exact)
     assert rel < 1e-14, f"relative error {mp.nstr(rel, 3)}"

@@ -85,14 +85,27 @@ BACKENDS: dict[str, Backend] = {
 
 
 def template_root() -> Path:
-    """The folder of the templates shipped as the package data ``symmech.templates``."""
-    root = importlib.resources.files("symmech.templates")
-    path = Path(str(root))
-    if not (path / "c").is_dir():
-        raise FileNotFoundError(
-            f"symmech templates not found in {path}; the installation is incomplete"
-        )
-    return path
+    """The folder of the templates.
+
+    In an installed package they are the package data ``symmech.templates`` (the
+    top-level ``templates/`` folder mapped into the wheel); when symmech is imported from
+    a source checkout (tests run from the repository root), they are that checkout's
+    ``templates/`` folder next to the package.
+    """
+    candidates = []
+    try:
+        candidates.append(Path(str(importlib.resources.files("symmech.templates"))))
+    except ModuleNotFoundError:
+        pass
+    candidates.append(Path(__file__).resolve().parents[2] / "templates")
+    for path in candidates:
+        if (path / "c" / "source.c.jinja").is_file():
+            return path
+    raise FileNotFoundError(
+        "symmech templates not found (looked in "
+        + ", ".join(str(c) for c in candidates)
+        + "); the installation is incomplete"
+    )
 
 
 @cache

@@ -358,6 +358,15 @@ def build_plan(
     mu = sp.Matrix(scene.constraint_matrix)
     closed = strategy == "closed_form"
 
+    def constrained_blocks() -> list[Block]:
+        """g, f, the constraint one-forms and mu_dot v: the constrained system's inputs."""
+        return [
+            _matrix_block("M", M),
+            _matrix_block("f", f),
+            _matrix_block("mu", mu),
+            _matrix_block("rate", scene.constraint_rate()),
+        ]
+
     if "mass_matrix" in wanted:
         add(
             "mass_matrix",
@@ -398,12 +407,7 @@ def build_plan(
                 "acceleration v_dot, constrained system solved in the code",
                 "g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)",
                 ("q", "v"),
-                [
-                    _matrix_block("M", M),
-                    _matrix_block("f", f),
-                    _matrix_block("mu", mu),
-                    _matrix_block("rate", scene.constraint_rate()),
-                ],
+                constrained_blocks(),
                 (n,),
                 step="constrained_acceleration",
                 step_args=(n, m, diag),
@@ -464,12 +468,7 @@ def build_plan(
                     "Lagrange multipliers lambda, solved in the code",
                     "lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)",
                     ("q", "v"),
-                    [
-                        _matrix_block("M", M),
-                        _matrix_block("f", f),
-                        _matrix_block("mu", mu),
-                        _matrix_block("rate", scene.constraint_rate()),
-                    ],
+                    constrained_blocks(),
                     (m,),
                     step="constrained_multipliers",
                     step_args=(n, m, diag),

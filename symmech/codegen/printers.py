@@ -121,10 +121,46 @@ def _float_literal(value: sp.Expr) -> str:
     return s if any(c in s for c in ".en") else s + ".0"
 
 
-class _PowMixin:
-    """Integer powers as products, half-integer powers through sqrt (shared)."""
+class _Float64Mixin:
+    """Conventions shared by both printers: names from a table, floating literals,
+    integer powers as products, half-integer powers through sqrt."""
 
     _sqrt: str
+
+    def _init_names(self, names: Mapping[sp.Symbol, str]) -> None:
+        self._names = dict(names)
+
+    def _print_Symbol(self, expr: sp.Symbol) -> str:
+        try:
+            return self._names[expr]
+        except KeyError:
+            raise ValueError(f"no generated name for the symbol {expr}") from None
+
+    _print_Dummy = _print_Symbol
+
+    def _print_Rational(self, expr: sp.Rational) -> str:
+        return _float_literal(expr)
+
+    _print_Integer = _print_Rational
+    _print_Float = _print_Rational
+
+    def _print_Pi(self, expr: sp.Expr) -> str:
+        return _float_literal(sp.pi)
+
+    def _print_Exp1(self, expr: sp.Expr) -> str:
+        return _float_literal(sp.E)
+
+    def _print_Half(self, expr: sp.Expr) -> str:
+        return "0.5"
+
+    def _print_One(self, expr: sp.Expr) -> str:
+        return "1.0"
+
+    def _print_NegativeOne(self, expr: sp.Expr) -> str:
+        return "-1.0"
+
+    def _print_Zero(self, expr: sp.Expr) -> str:
+        return "0.0"
 
     def _product(self, base: sp.Expr, k: int) -> str:
         """``(b*b*...)``, parenthesised: the Mul printer writes ``1.0/`` before a power in
@@ -144,99 +180,30 @@ class _PowMixin:
         if e.is_Rational and e.q == 2 and abs(e.p) <= 7:
             k = abs(int(e.p)) // 2
             root = f"{self._sqrt}({self._print(b)})"  # type: ignore[attr-defined]
-            body = "(" + "*".join([root] + [self.parenthesize(b, 50)] * k) + ")"  # type: ignore[attr-defined]
+            factors = [root] + [self.parenthesize(b, 50)] * k  # type: ignore[attr-defined]
+            body = "(" + "*".join(factors) + ")"
             return body if e > 0 else f"(1.0/{body})"
         return super()._print_Pow(expr)  # type: ignore[misc]
 
 
-class SymmechCPrinter(_PowMixin, C99CodePrinter):
+class SymmechCPrinter(_Float64Mixin, C99CodePrinter):
     """C99 printer with symmech's name table and float64 conventions (module docstring)."""
 
     _sqrt = "sqrt"
 
     def __init__(self, names: Mapping[sp.Symbol, str]):
         super().__init__({"strict": True})
-        self._names = dict(names)
-
-    def _print_Symbol(self, expr: sp.Symbol) -> str:
-        try:
-            return self._names[expr]
-        except KeyError:
-            raise ValueError(f"no generated name for the symbol {expr}") from None
-
-    _print_Dummy = _print_Symbol
-
-    def _print_Rational(self, expr: sp.Rational) -> str:
-        return _float_literal(expr)
-
-    def _print_Integer(self, expr: sp.Integer) -> str:
-        return _float_literal(expr)
-
-    def _print_Float(self, expr: sp.Float) -> str:
-        return _float_literal(expr)
-
-    def _print_Pi(self, expr: sp.Expr) -> str:
-        return _float_literal(sp.pi)
-
-    def _print_Exp1(self, expr: sp.Expr) -> str:
-        return _float_literal(sp.E)
-
-    def _print_Half(self, expr: sp.Expr) -> str:
-        return "0.5"
-
-    def _print_One(self, expr: sp.Expr) -> str:
-        return "1.0"
-
-    def _print_NegativeOne(self, expr: sp.Expr) -> str:
-        return "-1.0"
-
-    def _print_Zero(self, expr: sp.Expr) -> str:
-        return "0.0"
+        self._init_names(names)
 
 
-class SymmechNumPyPrinter(_PowMixin, NumPyPrinter):
+class SymmechNumPyPrinter(_Float64Mixin, NumPyPrinter):
     """NumPy printer with symmech's name table and float64 conventions."""
 
     _sqrt = "numpy.sqrt"
 
     def __init__(self, names: Mapping[sp.Symbol, str]):
         super().__init__({"fully_qualified_modules": True, "allow_unknown_functions": False})
-        self._names = dict(names)
-
-    def _print_Symbol(self, expr: sp.Symbol) -> str:
-        try:
-            return self._names[expr]
-        except KeyError:
-            raise ValueError(f"no generated name for the symbol {expr}") from None
-
-    _print_Dummy = _print_Symbol
-
-    def _print_Rational(self, expr: sp.Rational) -> str:
-        return _float_literal(expr)
-
-    def _print_Integer(self, expr: sp.Integer) -> str:
-        return _float_literal(expr)
-
-    def _print_Float(self, expr: sp.Float) -> str:
-        return _float_literal(expr)
-
-    def _print_Pi(self, expr: sp.Expr) -> str:
-        return _float_literal(sp.pi)
-
-    def _print_Exp1(self, expr: sp.Expr) -> str:
-        return _float_literal(sp.E)
-
-    def _print_Half(self, expr: sp.Expr) -> str:
-        return "0.5"
-
-    def _print_One(self, expr: sp.Expr) -> str:
-        return "1.0"
-
-    def _print_NegativeOne(self, expr: sp.Expr) -> str:
-        return "-1.0"
-
-    def _print_Zero(self, expr: sp.Expr) -> str:
-        return "0.0"
+        self._init_names(names)
 
     def _print_hypot(self, expr: sp.Expr) -> str:
         return f"numpy.hypot({self._print(expr.args[0])}, {self._print(expr.args[1])})"
