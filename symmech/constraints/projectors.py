@@ -15,8 +15,9 @@ Matrices act on velocity columns (``P v``).  ``P`` is g-self-adjoint: ``g P = P^
 from __future__ import annotations
 
 import sympy as sp
+from sympy.polys.matrices import DomainMatrix
 
-from symmech.geometry.field import field_solve
+from symmech.geometry.field import common_domain, field_solve
 from symmech.geometry.simplification import Level, tidy_matrix
 
 __all__ = ["gradients", "gram", "projectors", "solve_spd"]
@@ -61,9 +62,32 @@ def projectors(
     n = g.rows
     if mu.rows == 0:
         return sp.eye(n), sp.zeros(n, n)
+    if level != "none":
+        exact = _field_projectors(g, mu)
+        if exact is not None:
+            return exact
     Z = gradients(g, mu, "none")
     C = mu * Z
     Q = Z * solve_spd(C, mu, "none")
     Q = tidy_matrix(Q, level)
     P = tidy_matrix(sp.eye(n) - Q, level)
     return P, Q
+
+
+def _field_projectors(g: sp.MatrixBase, mu: sp.MatrixBase) -> tuple[sp.Matrix, sp.Matrix] | None:
+    """(P, Q) computed in the fraction field of the entries of g and mu (every entry a
+    cancelled fraction), or ``None`` when the entries admit no such field.
+
+    Forming ``Z C^{-1} mu`` with nested symbolic quotients and cancelling afterwards
+    costs seconds and leaves hundreds of thousands of operations for a generic 4 x 4
+    polynomial metric; in the field the same projector is a few cancelled fractions.
+    """
+    field = common_domain([g, mu])
+    if field.K is None:
+        return None
+    gd, mud = field.matrix(g), field.matrix(mu)
+    Z = gd.lu_solve(mud.transpose())
+    C = mud.matmul(Z)
+    Qd = Z.matmul(C.lu_solve(mud))
+    Pd = DomainMatrix.eye(g.rows, field.K).to_dense().sub(Qd.to_dense())
+    return field.to_sympy_matrix(Pd), field.to_sympy_matrix(Qd)
