@@ -26,9 +26,10 @@ Format (version 1)
     alpha = { value = 0.8, sign = "nonnegative" }
     g = { sign = "real" }        # no default value
 
-    [functions]                  # functions of time, used by their name alone
+    [functions]                  # functions, used by their name alone
     f = "A*sin(omega*t)"         # defined: "x - f" in an expression means x - A sin(omega t)
     h = {}                       # arbitrary: "x - h" means x - h(t), kept symbolic
+    V = { arguments = ["x", "y"] }   # arbitrary, of coordinates (and t): "V" means V(x, y)
 
     [frame]                      # quasi-velocities v with q_dot = S(q) v (optional)
     quasi_velocities = ["v_x", "v_y", "omega"]
@@ -48,7 +49,10 @@ Rules:
   :func:`symmech.declaration.expressions.parse_expression`, a whitelist over Python's
   ``ast``; nothing is passed to ``eval``, ``sympify`` or ``parse_expr``.  The names an
   expression may use are the coordinates, their velocities (``<name>dot``), the
-  quasi-velocities, ``t``, the parameters, the functions, ``pi`` and ``E``.  Where a name
+  quasi-velocities, ``t``, the parameters, the functions, ``pi`` and ``E``.  A ``#`` in an
+  expression is refused (Python would drop the rest as a comment), and so is a name
+  written with look-alike Unicode characters (``𝐱`` for ``x``); a line break is
+  whitespace, so an expression may span the lines of a multi-line string.  Where a name
   may appear (only the potential and walls may use ``t``, ...) is checked by
   :class:`~symmech.Scene`.  With a ``[frame]``, velocities are written in the
   quasi-velocities only (the kinetic energy and the constraints are in that basis).
@@ -58,11 +62,16 @@ Rules:
   of that sign.  Every declared parameter must be used, and every name used must be
   declared.  The scene's parameters are in the order of the file.  A parameter used as a
   restitution must be ``"nonnegative"`` or ``"positive"``, with a default value in [0, 1].
-* Functions take the single argument t and are written by name alone (``"x - f"``; the
-  parser refuses ``f(t)``: only its whitelisted functions may be called).  A defined
-  function is an expression in t and the parameters, substituted where its name appears;
-  an arbitrary function (``{}``, or ``{ real = false }`` for a complex-valued sympy
-  function) stays ``f(t)`` in the derived quantities.
+* Functions are written by name alone (``"x - f"``; the parser refuses ``f(t)``: only its
+  whitelisted functions may be called).  A defined function is an expression in t and the
+  parameters, substituted where its name appears.  An arbitrary (undefined) function
+  stays symbolic in the derived quantities: ``{}`` is ``f(t)``; ``{ arguments = ["x",
+  "y"] }`` declares ``V(x, y)``, its arguments distinct names among t and the coordinates
+  (a generic potential; its derivatives appear in the forcing); ``real = false`` makes a
+  complex-valued sympy function.  Where such a function may appear is checked by
+  :class:`~symmech.Scene` as for any expression.  A function of anything else (of an
+  expression ``V(x + y)``, of a velocity, of a parameter) cannot be written in a file:
+  :func:`dump_scene` refuses it, saying why.
 * Names (coordinates, parameters, quasi-velocities, functions) are Python identifiers,
   distinct, not ``t``, not starting with ``__``, and not the names of the parser's
   functions or constants; the scene and wall names are identifiers too (they become names
@@ -78,12 +87,15 @@ Errors raise :class:`SceneFileError` (a :class:`~symmech.SceneError`) listing ev
 each naming the file, the field (``walls[0].psi``), the line and the offending token.  When
 a declaration is refused (a coordinate, parameter, function or quasi-velocity name), the
 expressions are not read: every use of that name would be reported again.
-TOML parsers do not report where a key is, so the line is found by scanning the file
-text (:class:`_Locator`): the table header (``[parameters]``, the k-th ``[[walls]]``) is
-found first, then the first line ``key =`` below it before the next header; the element of
-an array is found as its quoted text on or after that line.  A key written in an unusual
-way (dotted keys, inline tables, escapes in strings) may get the line of its table or no
-line at all: the field name is always given.
+TOML parsers do not report where a key is, so the line is found by one linear-time scan
+of the file text (:class:`_Scanner`, no regular expression): the table header
+(``[parameters]``, the k-th ``[[walls]]``) is found first, then the first statement
+``key =`` below it before the next header (a dotted key ``parameters.m =`` too); the
+element of an array is found as its string on or after that line.  An expression in a
+multi-line string (triple quotes) is located on the line where its text starts, and its errors
+on the line within it.  A key written in an unusual way (inside an inline table, a string
+with line-ending backslashes) may get the line of its table or no line at all: the field
+name is always given.  Keys and tokens echoed in messages are cut to 60 characters.
 
 >>> sf = loads_scene('''
 ... coordinates = ["x"]
@@ -108,12 +120,14 @@ symmech.scenefile.SceneFileError: evil.toml: metric[0,0] (line 2, col 1): attrib
 
 from __future__ import annotations
 
+import bisect
 import difflib
 import importlib.resources
 import keyword
 import math
 import os
 import re
+import string
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -189,7 +203,7 @@ _TOP_KEYS = (
     "walls",
 )
 _PARAMETER_KEYS = ("value", "sign", "description")
-_FUNCTION_KEYS = ("expression", "real", "description")
+_FUNCTION_KEYS = ("expression", "arguments", "real", "description")
 _FRAME_KEYS = ("quasi_velocities", "matrix", "inverse")
 _WALL_KEYS = ("name", "psi", "restitution", "impulsive_constraints", "law")
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
@@ -258,123 +272,249 @@ class _Problems:
 # finding lines in the file text
 
 
-_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\[\]#]+?)\s*(\]\]?)\s*(#.*)?$")
+_BARE_KEY_CHARACTERS = frozenset(string.ascii_letters + string.digits + "_-")
+_ESCAPES = {"b": "\b", "t": "\t", "n": "\n", "f": "\f", "r": "\r", '"': '"', "\\": "\\"}
 
 
-def _unquote_key(key: str) -> str:
-    parts = [p.strip().strip("\"'") for p in key.split(".")]
-    return ".".join(parts)
+class _Scanner:
+    """One pass over TOML text (that tomllib accepted), noting where things are.
 
-
-def _track(line: str, depth: int, in_string: str | None) -> tuple[int, str | None]:
-    """Bracket depth and open multi-line string after ``line`` (strings and comments skipped).
-
-    ``depth`` counts the ``[`` and ``{`` of values still open (a matrix over several lines);
-    ``in_string`` is the delimiter of a multi-line string still open (or None).
-    """
-    j, n = 0, len(line)
-    while j < n:
-        if in_string is not None:
-            if in_string[0] == '"' and line[j] == "\\":
-                j += 2
-            elif line.startswith(in_string, j):
-                j += len(in_string)
-                in_string = None
-            else:
-                j += 1
-            continue
-        c = line[j]
-        if c == "#":
-            break
-        if line.startswith('"""', j) or line.startswith("'''", j):
-            in_string = line[j : j + 3]
-            j += 3
-            continue
-        if c in "\"'":
-            in_string = c
-        elif c in "[{":
-            depth += 1
-        elif c in "]}":
-            depth = max(0, depth - 1)
-        j += 1
-    if in_string in ('"', "'"):
-        in_string = None  # a one-line string ends with its line (else TOML refused the file)
-    return depth, in_string
-
-
-class _Locator:
-    """Find the line of a key or of an array element in TOML text (see the module doc).
-
-    Regions: the top level runs from line 1 to the first table header; a table
-    ``[name]`` (or the k-th ``[[name]]``) runs from its header to the next header.  A line
-    inside a multi-line array or string (a matrix row ``[0, 1]`` alone on its line) is not
-    a header.
+    Linear time and no regular expression: each character is looked at a bounded number
+    of times, whatever the file holds (a table header of 100 000 spaces costs what its
+    length costs).  Notes the table headers ``(line, name, is_array)``, the keys of the
+    statements ``key = value`` ``(line, position of their header or -1, key parts)`` (not
+    the keys inside inline tables), and every string value ``(line, decoded value)``, the
+    line being where its content starts (the line after an opening ``\"\"\"`` that ends its
+    line, as TOML drops that line break).  Lines are 0-based.
     """
 
     def __init__(self, text: str):
-        # TOML counts lines by "\n" only (str.splitlines also splits at \f, \u2028, ...)
-        self.lines = text.split("\n")
-        self.headers: list[tuple[int, str, bool]] = []  # (0-based line, name, is_array)
-        depth, in_string = 0, None
-        for i, line in enumerate(self.lines):
-            if depth == 0 and in_string is None:
-                m = _HEADER.match(line)
-                if m and (m.group(1) == "[[") == (m.group(3) == "]]"):
-                    self.headers.append((i, _unquote_key(m.group(2)), m.group(1) == "[["))
-                    continue
-            depth, in_string = _track(line, depth, in_string)
-        self.header_lines = frozenset(i for i, _, _ in self.headers)
+        self.text = text
+        self.i = 0
+        self.line = 0
+        self.headers: list[tuple[int, str, bool]] = []
+        self.keys: list[tuple[int, int, tuple[str, ...]]] = []
+        self.strings: list[tuple[int, str]] = []
 
-    def _region(self, table: str | None, index: int = 0) -> tuple[int, int] | None:
-        if table is None:
-            end = self.headers[0][0] if self.headers else len(self.lines)
-            return 0, end
-        seen = 0
-        for pos, (i, name, _) in enumerate(self.headers):
-            if name == table:
-                if seen == index:
-                    end = (
-                        self.headers[pos + 1][0] if pos + 1 < len(self.headers) else len(self.lines)
-                    )
-                    return i, end
-                seen += 1
+    def run(self) -> _Scanner:
+        text, n = self.text, len(self.text)
+        depth = 0  # [ and { of values still open (a matrix over several lines)
+        statement = True  # at the start of a statement: a header or a key
+        while self.i < n:
+            c = text[self.i]
+            if c == "\n":
+                self.line += 1
+                self.i += 1
+                statement = statement or depth == 0
+            elif c in " \t\r":
+                self.i += 1
+            elif c == "#":
+                end = text.find("\n", self.i)
+                self.i = n if end < 0 else end
+            elif statement and depth == 0:
+                statement = False
+                start = self.i
+                if c == "[":
+                    self._header()
+                else:
+                    self._statement_key()
+                self.i = max(self.i, start + 1)
+            elif c in "\"'":
+                found = self._string()
+                if found is not None:
+                    self.strings.append(found)
+            else:
+                if c in "[{":
+                    depth += 1
+                elif c in "]}":
+                    depth = max(0, depth - 1)
+                self.i += 1
+        return self
+
+    def _header(self) -> None:
+        line = self.line
+        array = self.text.startswith("[[", self.i)
+        self.i += 2 if array else 1
+        parts = self._key_parts()
+        closing = "]]" if array else "]"
+        if parts is not None and self.text.startswith(closing, self.i):
+            self.i += len(closing)
+            self.headers.append((line, ".".join(parts), array))
+
+    def _statement_key(self) -> None:
+        line = self.line
+        parts = self._key_parts()
+        if parts is not None and self.text.startswith("=", self.i):
+            self.i += 1
+            self.keys.append((line, len(self.headers) - 1, tuple(parts)))
+
+    def _skip_blanks(self) -> None:
+        text, n = self.text, len(self.text)
+        while self.i < n and text[self.i] in " \t":
+            self.i += 1
+
+    def _key_parts(self) -> list[str] | None:
+        """A (dotted) key: bare or quoted parts separated by dots; None if there is none."""
+        text, n = self.text, len(self.text)
+        parts: list[str] = []
+        while True:
+            self._skip_blanks()
+            if self.i >= n:
+                return None
+            c = text[self.i]
+            if c in "\"'":
+                if text.startswith(c * 3, self.i):
+                    return None  # (a multi-line string is not a key)
+                found = self._string()
+                if found is None:
+                    return None
+                parts.append(found[1])
+            else:
+                j = self.i
+                while j < n and text[j] in _BARE_KEY_CHARACTERS:
+                    j += 1
+                if j == self.i:
+                    return None
+                parts.append(text[self.i : j])
+                self.i = j
+            self._skip_blanks()
+            if not self.text.startswith(".", self.i):
+                return parts
+            self.i += 1
+
+    def _string(self) -> tuple[int, str] | None:
+        """The string at ``self.i``: (line of its content, decoded value); None if broken."""
+        text, n = self.text, len(self.text)
+        quote = text[self.i]
+        multi = text.startswith(quote * 3, self.i)
+        self.i += 3 if multi else 1
+        if multi and text.startswith(("\n", "\r\n"), self.i):
+            self.i += 1 if text[self.i] == "\n" else 2
+            self.line += 1
+        content_line = self.line
+        out: list[str] = []
+        while self.i < n:
+            c = text[self.i]
+            if c == quote:
+                run = 1
+                if multi:
+                    while run < 5 and text.startswith(quote, self.i + run):
+                        run += 1
+                    if run < 3:
+                        out.append(quote * run)
+                        self.i += run
+                        continue
+                out.append(quote * (run - 3 if multi else 0))
+                self.i += run
+                return content_line, "".join(out)
+            if c == "\n" or (c == "\r" and text.startswith("\r\n", self.i)):
+                if not multi:
+                    return None
+                self.i += 1 if c == "\n" else 2
+                self.line += 1
+                out.append("\n")
+            elif c == "\\" and quote == '"':
+                self._escape(out, multi)
+            else:
+                out.append(c)
+                self.i += 1
         return None
+
+    def _escape(self, out: list[str], multi: bool) -> None:
+        text, n = self.text, len(self.text)
+        nxt = text[self.i + 1 : self.i + 2]
+        if multi and nxt in (" ", "\t", "\r", "\n"):
+            # a line-ending backslash: the blanks and line breaks after it are dropped
+            j = self.i + 1
+            while j < n and text[j] in " \t\r\n":
+                self.line += text[j] == "\n"
+                j += 1
+            self.i = j
+        elif nxt in _ESCAPES:
+            out.append(_ESCAPES[nxt])
+            self.i += 2
+        elif nxt in ("u", "U"):
+            width = 4 if nxt == "u" else 8
+            digits = text[self.i + 2 : self.i + 2 + width]
+            if len(digits) == width and all(d in string.hexdigits for d in digits):
+                code = int(digits, 16)
+                if code <= 0x10FFFF:
+                    out.append(chr(code))
+            self.i += 2 + width
+        else:
+            out.append("\\")
+            self.i += 1
+
+
+class _Locator:
+    """The lines of keys, tables and array elements of TOML text (see the module doc).
+
+    Built from one linear :class:`_Scanner` pass; every query is a dictionary look-up or a
+    binary search.  Regions: the top level runs from line 1 to the first table header; a
+    table ``[name]`` (or the k-th ``[[name]]``) from its header to the next header.  All
+    lines returned are 1-based.
+    """
+
+    def __init__(self, text: str):
+        scan = _Scanner(text).run()
+        self.headers = scan.headers
+        self._header_lines = [line + 1 for line, _, _ in scan.headers]
+        self._positions: dict[str, list[int]] = {}
+        for pos, (_, name, _) in enumerate(scan.headers):
+            self._positions.setdefault(name, []).append(pos)
+        self._keys: dict[tuple[int, tuple[str, ...]], int] = {}
+        for line, pos, parts in scan.keys:
+            # a dotted key a.b.c = 1 is also where a and a.b are first written
+            for k in range(1, len(parts) + 1):
+                self._keys.setdefault((pos, parts[:k]), line + 1)
+        self._strings: dict[str, list[int]] = {}
+        for line, value in scan.strings:
+            self._strings.setdefault(value, []).append(line + 1)
+
+    def _header(self, table: str, index: int = 0) -> int | None:
+        positions = self._positions.get(table, ())
+        return positions[index] if index < len(positions) else None
 
     def table(self, table: str, index: int = 0) -> int | None:
         """1-based line of the header of ``table`` (the ``index``-th for arrays)."""
-        region = self._region(table, index)
-        return None if region is None else region[0] + 1
+        pos = self._header(table, index)
+        return None if pos is None else self._header_lines[pos]
 
     def key(self, table: str | None, key: str, index: int = 0) -> int | None:
-        """1-based line of ``key =`` in ``table`` (None: top level), else of the table."""
-        region = self._region(table, index)
-        pattern = re.compile(
-            rf"^\s*(?:{re.escape(key)}|\"{re.escape(key)}\"|'{re.escape(key)}')\s*="
-        )
-        if region is not None:
-            for i in range(*region):
-                if pattern.match(self.lines[i]):
-                    return i + 1
-        if table is not None and index == 0:
-            dotted = re.compile(rf"^\s*{re.escape(table)}\s*\.\s*{re.escape(key)}\s*=")
-            for i, line in enumerate(self.lines):
-                if dotted.match(line):
-                    return i + 1
-        if region is not None and table is not None:
-            return region[0] + 1
-        return None
+        """1-based line of ``key =`` in ``table`` (None: top level), else of the table.
+
+        A dotted key is found too: ``value`` of table ``parameters.m`` is ``m.value =`` in
+        ``[parameters]`` or ``parameters.m.value =`` at the top level.
+        """
+        if table is None:
+            return self._keys.get((-1, (key,)))
+        pos = self._header(table, index)
+        if pos is not None and (pos, (key,)) in self._keys:
+            return self._keys[pos, (key,)]
+        if index == 0:
+            parts = tuple(table.split("."))
+            for cut in range(len(parts) - 1, -1, -1):
+                outer = -1 if cut == 0 else self._header(".".join(parts[:cut]))
+                found = self._keys.get((outer, (*parts[cut:], key))) if outer is not None else None
+                if found is not None:
+                    return found
+        return None if pos is None else self._header_lines[pos]
 
     def element(self, start: int | None, value: object) -> int | None:
-        """1-based line of the quoted text ``value`` on or after line ``start``."""
+        """1-based line where the string ``value`` starts, on or after line ``start`` and
+        before the next table header; else ``start``."""
         if start is None or not isinstance(value, str) or not value:
             return start
-        needles = (f'"{value}"', f"'{value}'", f'"""{value}', f"'''{value}")
-        for i in range(start - 1, len(self.lines)):
-            if any(n in self.lines[i] for n in needles):
-                return i + 1
-            if i > start - 1 and i in self.header_lines:
-                break
-        return start
+        lines = self._strings.get(value)
+        if not lines:
+            return start
+        k = bisect.bisect_left(lines, start)
+        if k == len(lines):
+            return start
+        h = bisect.bisect_right(self._header_lines, start)
+        if h < len(self._header_lines) and self._header_lines[h] <= lines[k]:
+            return start
+        return lines[k]
 
 
 # ---------------------------------------------------------------------------------------
@@ -393,8 +533,8 @@ class SceneFile:
         Default values of the parameters that have one: parameter Symbol -> exact sympy
         number (a Float where the file wrote a decimal), in the scene's parameter order.
     functions:
-        The functions of time: name -> the expression substituted for it (a defined
-        function) or the applied function ``f(t)`` (an arbitrary one).
+        The functions: name -> the expression substituted for it (a defined function of
+        time) or the applied function ``f(t)`` or ``V(x, y)`` (an arbitrary one).
     description:
         The file's description ("" when it has none).
     path:
@@ -437,7 +577,10 @@ def builtin_scene_path(name: str) -> Path:
     if name not in names:
         hint = _did_you_mean(name, names)
         raise SceneFileError(
-            [f"no scene file {name!r} and no built-in scene of that name{hint}; built-in: {names}"]
+            [
+                f"no scene file {_clip(name)!r} and no built-in scene of that name{hint};"
+                f" built-in: {names}"
+            ]
         )
     resource = importlib.resources.files(_SCENES_PACKAGE).joinpath(_SCENES_FOLDER, f"{name}.toml")
     return Path(str(resource))
@@ -572,17 +715,19 @@ class _Loader:
     ) -> None:
         """Refuse the keys of ``value`` not in ``allowed``, suggesting the closest one.
 
-        The line is that of ``key =`` in ``table`` (the ``index``-th for arrays of tables);
-        for an inline table (``m = { valeu = 1 }``) pass its line as ``inline_line``.
+        The line is that of ``key =`` in ``table`` (the ``index``-th for arrays of tables),
+        else ``inline_line``: for an inline table (``m = { valeu = 1 }``, whose keys the
+        locator does not see) pass the entry's line.
         """
         for key in value:
             if key not in allowed:
                 hint = _did_you_mean(key, allowed)
+                line = self.line(table, key, index)
                 self.fail(
-                    f"unknown key '{key}'{hint}; allowed keys: {', '.join(allowed)}",
-                    f"{where}{'.' if where else ''}{key}",
-                    inline_line if inline_line is not None else self.line(table, key, index),
-                    key,
+                    f"unknown key '{_clip(key)}'{hint}; allowed keys: {', '.join(allowed)}",
+                    f"{where}{'.' if where else ''}{_clip(key)}",
+                    line if line is not None else inline_line,
+                    _clip(key),
                 )
 
     def entry_line(self, table: str, key: str) -> int | None:
@@ -594,25 +739,28 @@ class _Loader:
 
     def sub_key_args(self, table: str, key: str, line: int | None) -> dict[str, Any]:
         """``check_keys`` arguments for the keys of the entry ``key`` of ``[table]``: in its
-        sub-table ``[table.key]`` if it has one, else on its own (inline table) line."""
-        sub = f"{table}.{key}"
-        if self.loc.table(sub) is not None:
-            return {"table": sub}
-        return {"table": table, "inline_line": line}
+        sub-table ``[table.key]`` or as dotted keys (``key.value = 1``) if written so, else
+        on the entry's own (inline table) line."""
+        return {"table": f"{table}.{key}", "inline_line": line}
 
     def name_ok(self, name: object, field: str, line: int | None, kind: str) -> str | None:
         """Check a declared name; register it; return it or None."""
         if not isinstance(name, str):
-            self.fail(f"{kind} names must be strings, got {_toml_type(name)} {name!r}", field, line)
+            self.fail(
+                f"{kind} names must be strings, got {_toml_type(name)} {_short(name, 60)}",
+                field,
+                line,
+            )
             self.names_refused = True
             return None
         problem = None
+        shown = repr(_clip(name))
         if not _IDENTIFIER.match(name):
-            problem = f"{kind} name {name!r} is not an identifier (letters, digits, _)"
+            problem = f"{kind} name {shown} is not an identifier (letters, digits, _)"
         elif len(name) > _MAX_IDENTIFIER:
             problem = f"{kind} name {name[:20]!r}... is longer than {_MAX_IDENTIFIER} characters"
         elif name.startswith("__"):
-            problem = f"{kind} name {name!r} may not start with '__'"
+            problem = f"{kind} name {shown} may not start with '__'"
         elif keyword.iskeyword(name):
             problem = f"{kind} name {name!r} is a Python keyword"
         elif name in ALLOWED_FUNCTIONS or name in ALLOWED_CONSTANTS:
@@ -620,7 +768,7 @@ class _Loader:
         elif name in self.reserved:
             problem = f"{kind} name {name!r} is already used for {self.reserved[name]}"
         if problem:
-            self.fail(problem, field, line, name)
+            self.fail(problem, field, line, _clip(name))
             self.names_refused = True
             return None
         self.reserved[name] = f"the {kind} declared in {field}"
@@ -638,7 +786,7 @@ class _Loader:
             )
             return None
         if isinstance(value, float) and not math.isfinite(value):
-            self.fail(f"expected a finite number, got {value}", field, line, str(value))
+            self.fail(f"expected a finite number, got {value}", field, line, _clip(value))
             return None
         if isinstance(value, int) and abs(value) >= 10**MAX_DIGITS:
             self.fail(
@@ -650,6 +798,8 @@ class _Loader:
             return None
         if isinstance(value, int | float):
             return sp.Integer(value) if isinstance(value, int) else sp.Float(value)
+        # the line where the text starts: a multi-line string's content starts below its key
+        line = self.loc.element(line, value)
         try:
             expr = parse_expression(value, table, field=field, line=line)
         except ExpressionError as exc:
@@ -698,10 +848,11 @@ class _Loader:
             fmt = data["format"]
             if isinstance(fmt, bool) or fmt != FORMAT_VERSION:
                 self.fail(
-                    f"unsupported format {fmt!r}; this symmech reads format {FORMAT_VERSION}",
+                    f"unsupported format {_short(fmt, 60)}; this symmech reads format"
+                    f" {FORMAT_VERSION}",
                     "format",
                     self.line(None, "format"),
-                    str(fmt),
+                    _clip(fmt),
                 )
         name = data.get("name", self.default_name)
         if not isinstance(name, str) or not _IDENTIFIER.match(name) or len(name) > 64:
@@ -781,14 +932,13 @@ class _Loader:
         params: list[sp.Symbol] = []
         defaults: dict[sp.Symbol, sp.Expr] = {}
         for key, spec in raw.items():
-            field_name = f"parameters.{key}"
+            field_name = f"parameters.{_clip(key)}"
             line = self.entry_line("parameters", key)
             name = self.name_ok(key, field_name, line, "parameter")
             if isinstance(spec, dict):
                 keys = self.sub_key_args("parameters", key, line)
                 self.check_keys(spec, _PARAMETER_KEYS, field_name, **keys)
-                if "table" in keys and "inline_line" not in keys:
-                    line = self.line(keys["table"], "value") or line
+                line = self.line(keys["table"], "value") or line
                 value = spec.get("value")
                 sign = spec.get("sign", "positive")
                 if "description" in spec and not isinstance(spec["description"], str):
@@ -797,11 +947,11 @@ class _Loader:
                 value, sign = spec, "positive"
             if not isinstance(sign, str) or sign not in SIGNS:
                 self.fail(
-                    f"sign must be one of {', '.join(SIGNS)}, got {sign!r}"
+                    f"sign must be one of {', '.join(SIGNS)}, got {_short(sign, 60)}"
                     f"{_did_you_mean(str(sign), list(SIGNS))}",
                     f"{field_name}.sign",
                     line,
-                    str(sign),
+                    _clip(sign),
                 )
                 sign = "positive"
             if name is None:
@@ -822,7 +972,9 @@ class _Loader:
         if number is None:
             return None
         if not number.is_number or not number.is_real:
-            self.fail(f"default value {number} is not a real number", field, line, str(value))
+            self.fail(
+                f"default value {_clip(number)} is not a real number", field, line, _clip(value)
+            )
             return None
         test = {
             "positive": number.is_positive,
@@ -837,7 +989,7 @@ class _Loader:
                 " (parameters are positive unless 'sign' says otherwise)",
                 field,
                 line,
-                str(value),
+                _clip(value),
             )
             return None
         return number
@@ -863,20 +1015,27 @@ class _Loader:
         # the definitions may use t and the parameters only
         allowed = {k: v for k, v in self.table.items() if k == "t" or v not in self.coord_like}
         out: dict[str, sp.Expr] = {}
+        # a refused function still gets a place-holder f(t) in the symbol table: the
+        # expressions that use it are read as usual, and report their own problems only
+        stand_in: dict[str, sp.Expr] = {}
         for key, spec in raw.items():
-            field_name = f"functions.{key}"
+            field_name = f"functions.{_clip(key)}"
             line = self.entry_line("functions", key)
             name = self.name_ok(key, field_name, line, "function")
             expression: object = None
+            arguments: object = None
             real = True
             if isinstance(spec, dict):
                 keys = self.sub_key_args("functions", key, line)
                 self.check_keys(spec, _FUNCTION_KEYS, field_name, **keys)
                 expression = spec.get("expression")
+                arguments = spec.get("arguments")
                 real = spec.get("real", True)
                 if not isinstance(real, bool):
                     self.fail("'real' must be true or false", f"{field_name}.real", line)
                     real = True
+                if "description" in spec and not isinstance(spec["description"], str):
+                    self.fail("expected a string", f"{field_name}.description", line)
             elif isinstance(spec, str | int | float) and not isinstance(spec, bool):
                 expression = spec
             else:
@@ -886,18 +1045,69 @@ class _Loader:
                     field_name,
                     line,
                 )
-                continue
+                spec = None
             if name is None:
                 continue
-            if expression is None:
-                out[name] = sp.Function(name, real=True)(TIME) if real else sp.Function(name)(TIME)
+            value: sp.Expr | None = None
+            if spec is None:
+                pass
+            elif expression is not None and arguments is not None:
+                self.fail(
+                    "give 'expression' (a defined function of t) or 'arguments' (an arbitrary"
+                    " function of them), not both",
+                    f"{field_name}.arguments",
+                    line,
+                )
+            elif expression is not None:
+                value = self.expression(expression, field_name, line, allowed)
             else:
-                expr = self.expression(expression, field_name, line, allowed)
-                if expr is not None:
-                    out[name] = expr
+                args = self.function_arguments(arguments, f"{field_name}.arguments", line)
+                if args is not None:
+                    fn = sp.Function(name, real=True) if real else sp.Function(name)
+                    value = fn(*args)
+            if value is None:
+                stand_in[name] = sp.Function(name, real=True)(TIME)
+            else:
+                out[name] = value
         self.function_names = frozenset(raw)
+        self.table.update(stand_in)
         self.table.update(out)
         return out
+
+    def function_arguments(
+        self, raw: object, field: str, line: int | None
+    ) -> list[sp.Symbol] | None:
+        """The arguments of an arbitrary function: distinct names among t and the
+        coordinates (default: t alone)."""
+        if raw is None:
+            return [TIME]
+        coordinates = {s.name: s for s in self.q}
+        allowed = ["t", *coordinates]
+        if not isinstance(raw, list) or not raw or not all(isinstance(a, str) for a in raw):
+            self.fail(
+                f"expected a non-empty array of argument names (among {', '.join(allowed)}),"
+                f" got {_toml_type(raw)} {_short(raw, 60)}",
+                field,
+                line,
+            )
+            return None
+        args: list[sp.Symbol] = []
+        for a in raw:
+            if a not in allowed:
+                self.fail(
+                    f"'{_clip(a)}' is not t or a coordinate: an arbitrary function's arguments"
+                    f" are among {', '.join(allowed)}{_did_you_mean(a, allowed)}",
+                    field,
+                    self.loc.element(line, a),
+                    _clip(a),
+                )
+                return None
+            arg = TIME if a == "t" else coordinates[a]
+            if arg in args:
+                self.fail(f"argument '{a}' is repeated", field, self.loc.element(line, a), a)
+                return None
+            args.append(arg)
+        return args
 
     def frame(self, q: list[sp.Symbol]) -> tuple[sp.Matrix | None, list[sp.Symbol] | None]:
         raw = self.data.get("frame")
@@ -1097,10 +1307,10 @@ class _Loader:
             law = spec.get("law", "newton")
             if law not in LAWS:
                 self.fail(
-                    f"law must be one of {', '.join(LAWS)}, got {law!r}",
+                    f"law must be one of {', '.join(LAWS)}, got {_short(law, 60)}",
                     f"{label}.law",
                     self.line("walls", "law", k),
-                    str(law),
+                    _clip(law),
                 )
                 continue
             iline = self.line("walls", "impulsive_constraints", k)
@@ -1134,14 +1344,14 @@ class _Loader:
             return None
         if not (value.is_number or (isinstance(value, sp.Symbol) and value in self.param_set)):
             self.fail(
-                f"restitution must be a number in [0, 1] or a parameter name, got {value}",
+                f"restitution must be a number in [0, 1] or a parameter name, got {_clip(value)}",
                 field_name,
                 line,
-                str(raw),
+                _clip(raw),
             )
             return None
         if value.is_number and (not value.is_real or value < 0 or value > 1):
-            self.fail(f"restitution {raw} is outside [0, 1]", field_name, line, str(raw))
+            self.fail(f"restitution {_clip(raw)} is outside [0, 1]", field_name, line, _clip(raw))
             return None
         if isinstance(value, sp.Symbol):
             # a restitution parameter: alpha in [0, 1], so its sign and default must allow it
@@ -1168,6 +1378,7 @@ class _Loader:
         return value
 
     # derived sets, filled in by build()
+    q: tuple[sp.Symbol, ...] = ()
     coord_like: frozenset[sp.Expr] = frozenset()
     velocity_like: frozenset[sp.Expr] = frozenset()
     param_set: frozenset[sp.Symbol] = frozenset()
@@ -1177,6 +1388,7 @@ class _Loader:
         self.check_keys(data, _TOP_KEYS, "", None)
         name, description = self.header()
         q = self.coordinates()
+        self.q = tuple(q)
         params, defaults = self.parameters()
         self.defaults = defaults
         self.param_set = frozenset(params)
@@ -1309,6 +1521,13 @@ def _number_text(value: sp.Expr) -> str:
     if isinstance(value, sp.Float):
         return repr(float(value))
     return str(value)
+
+
+def _clip(text: object, limit: int = 60) -> str:
+    """``str(text)`` (a key or a token from the file) cut to ``limit`` characters and "...",
+    so that a message never echoes a huge key whole."""
+    shown = str(text)
+    return shown if len(shown) <= limit else shown[:limit] + "..."
 
 
 def _short(value: object, limit: int = 40) -> str:
@@ -1445,6 +1664,8 @@ def _toml_string(text: str) -> str:
 def _toml_value(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
     if isinstance(expr, sp.Integer) and abs(int(expr)) < 2**53:
         return str(int(expr))
+    if isinstance(expr, sp.Float) and expr._prec == 53 and math.isfinite(float(expr)):
+        return repr(float(expr))  # a TOML float, read back as the same 53-bit Float
     return _toml_string(_print_expression(expr, where, table))
 
 
@@ -1471,6 +1692,49 @@ def _row_expression(row: sp.MatrixBase, v: Sequence[sp.Symbol]) -> sp.Expr:
     return sp.Add(*[c * s for c, s in zip(row, v, strict=True)])
 
 
+def _check_function(
+    f: sp.Expr, arguments: Sequence[sp.Symbol], applied: Mapping[str, sp.Expr]
+) -> None:
+    """Refuse an applied undefined function that a scene file cannot declare."""
+    name = f.func.__name__
+    allowed = ", ".join(a.name for a in arguments)
+    if not _IDENTIFIER.match(name) or len(name) > _MAX_IDENTIFIER:
+        raise SceneFileError([f"functions: the name of {_short(f, 60)} is not an identifier"])
+    if f.func not in (sp.Function(name, real=True), sp.Function(name)):
+        raise SceneFileError(
+            [
+                f"functions: {name} has sympy assumptions that a scene file cannot write (it"
+                " declares a function real, the default, or not: real = false)"
+            ]
+        )
+    bad = [a for a in f.args if a not in arguments]
+    if not f.args or bad or len(set(f.args)) != len(f.args):
+        why = (
+            f"its argument {_short(bad[0], 60)} is not t or a coordinate"
+            if bad
+            else "it has no arguments"
+            if not f.args
+            else "an argument is repeated"
+        )
+        raise SceneFileError(
+            [
+                f"functions: cannot write {_short(f, 60)}: {why}.  A scene file declares an"
+                f" arbitrary function by its name and its arguments, distinct names among"
+                f" {allowed} (a function of an expression, of a velocity or of a parameter"
+                " would need the expression written in the file, which the format does not"
+                " have: substitute a new function of the coordinates, or a symbol, before"
+                " writing)"
+            ]
+        )
+    if name in applied and applied[name] != f:
+        raise SceneFileError(
+            [
+                f"functions: {applied[name]} and {f} have the same name; a scene file names"
+                " each function once"
+            ]
+        )
+
+
 def dump_scene(
     scene: Scene,
     *,
@@ -1482,15 +1746,17 @@ def dump_scene(
 
     ``defaults`` (parameter Symbol or name -> number) become the parameters' default
     values; ``functions`` (name -> expression in t) are written as defined functions.  The
-    applied undefined functions of ``t`` in the scene (``f(t)``) are written as arbitrary
-    functions.  The metric is written as a matrix (also for a scene declared by its kinetic
-    energy), the frame as ``matrix`` (S), constraints as expressions in the velocities.
-    ``load``-ing the text gives a scene with the same coordinates, parameters, metric,
-    potential, frame, constraints and walls.
+    applied undefined functions in the scene (``f(t)``, ``V(x, y)``) are written as
+    arbitrary functions with their arguments.  The metric is written as a matrix (also for
+    a scene declared by its kinetic energy), the frame as ``matrix`` (S), constraints as
+    expressions in the velocities.  ``load``-ing the text gives a scene with the same
+    coordinates, parameters, metric, potential, frame, constraints and walls.
 
     Raises :class:`SceneFileError` when something cannot be written (a name that is not an
     identifier, a parameter with assumptions no ``sign`` gives, an expression outside the
-    parser's subset such as a derivative).
+    parser's subset such as a derivative, an undefined function of something else than
+    distinct coordinates and t, such as ``V(x + y)``: the format declares a function by
+    its argument names only).
     """
     decl = scene.declaration
     q, v = decl.coordinates, decl.velocities
@@ -1530,12 +1796,10 @@ def dump_scene(
     ]
     for w in decl.walls:
         everything.extend([w.psi, *w.impulsive_matrix])
+    arguments = (TIME, *q)
     for e in everything:
-        for f in sp.sympify(e).atoms(AppliedUndef):
-            if f.args != (TIME,) or not _IDENTIFIER.match(f.func.__name__):
-                raise SceneFileError(
-                    [f"functions: {f} is not a function of t alone; scene files cannot hold it"]
-                )
+        for f in sorted(sp.sympify(e).atoms(AppliedUndef), key=sp.default_sort_key):
+            _check_function(f, arguments, applied)
             applied[f.func.__name__] = f
     table.update(applied)
     fn_defs = dict(functions or {})
@@ -1582,8 +1846,12 @@ def dump_scene(
         lines.append("")
         lines.append("[functions]")
         for nm, f in applied.items():
-            real = f.func == sp.Function(nm, real=True)
-            lines.append(f"{nm} = {{}}" if real else f"{nm} = {{ real = false }}")
+            parts = []
+            if f.args != (TIME,):
+                parts.append("arguments = [" + ", ".join(f'"{a.name}"' for a in f.args) + "]")
+            if f.func != sp.Function(nm, real=True):
+                parts.append("real = false")
+            lines.append(f"{nm} = {{ {', '.join(parts)} }}" if parts else f"{nm} = {{}}")
         for nm, expr in fn_defs.items():
             lines.append(f"{nm} = {_toml_value(expr, f'functions.{nm}', table)}")
 

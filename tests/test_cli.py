@@ -38,18 +38,45 @@ PROGRESS = re.compile(r"^\[symmech +(\d+\.\d\d)s\] (.+)$")
 EXIT_INPUT = 2  # bad input: unknown scene, refused scene file, usage (cli module docstring)
 
 
-def symmech(*args: str, cwd: Path, timeout: float = 120) -> subprocess.CompletedProcess:
-    """Run ``python -m symmech ARGS`` in ``cwd``; return the finished process (text)."""
-    env = {**os.environ, "PYTHONIOENCODING": "utf-8"}
+def _env(extra: dict[str, str] | None = None) -> dict[str, str]:
+    """The environment of a subprocess: this working tree first on PYTHONPATH, so that
+    ``python -m symmech`` in another folder runs the code under test, not an installed
+    copy."""
+    path = os.environ.get("PYTHONPATH")
+    tree = os.pathsep.join([str(ROOT), *([path] if path else [])])
+    return {**os.environ, "PYTHONPATH": tree, **(extra or {})}
+
+
+def python(
+    *args: str,
+    cwd: Path,
+    env: dict[str, str] | None = None,
+    encoding: str = "utf-8",
+    timeout: float = 120,
+) -> subprocess.CompletedProcess:
+    """Run ``python ARGS`` (this interpreter, this working tree) in ``cwd``; return the
+    finished process, its output decoded with ``encoding``."""
     return subprocess.run(
-        [sys.executable, "-m", "symmech", *args],
+        [sys.executable, *args],
         cwd=cwd,
-        env=env,
+        env=_env(env),
         capture_output=True,
         text=True,
-        encoding="utf-8",
+        encoding=encoding,
         timeout=timeout,
     )
+
+
+def symmech(
+    *args: str,
+    cwd: Path,
+    timeout: float = 120,
+    env: dict[str, str] | None = None,
+    encoding: str = "utf-8",
+) -> subprocess.CompletedProcess:
+    """Run ``python -m symmech ARGS`` in ``cwd``; return the finished process (text)."""
+    env = {"PYTHONIOENCODING": "utf-8", **(env or {})}
+    return python("-m", "symmech", *args, cwd=cwd, env=env, encoding=encoding, timeout=timeout)
 
 
 def _error_lines(stderr: str) -> list[str]:
@@ -80,6 +107,19 @@ ELLIPSE_PSI = -X - sp.sqrt(A**2 * sp.cos(TH) ** 2 + B**2 * sp.sin(TH) ** 2)
 
 def _pretty(expr: sp.Basic) -> str:
     return sp.pretty(expr, use_unicode=True, wrap_line=False)
+
+
+# ---------------------------------------------------------------------------------------
+# the code under test
+
+
+def test_subprocesses_run_this_working_tree(tmp_path: Path):
+    """Every subprocess here imports the symmech next to this file, in any folder."""
+    proc = python("-c", "import symmech; print(symmech.__file__)", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert Path(proc.stdout.strip()) == ROOT / "symmech" / "__init__.py"
+    probe = "import sys, symmech.cli; print(symmech.cli.__file__); sys.exit(0)"
+    assert Path(python("-c", probe, cwd=tmp_path).stdout.strip()) == ROOT / "symmech" / "cli.py"
 
 
 # ---------------------------------------------------------------------------------------
@@ -152,9 +192,11 @@ def test_show_bouncing_ellipse_latex(tmp_path: Path):
     titles = re.findall(r"^\\paragraph\{(.*)\}$", out, re.M)
     assert len(titles) >= 8
     for title in titles:
-        plain = re.sub(r"\\(text(asciicircum|asciitilde|backslash)\{\}|[&%$#_{}])", "", title)
-        assert not set(plain) & set("\\^_&%$#~{}"), title
+        escapes = r"\\(text(asciicircum|asciitilde|backslash|less|greater)\{\}|[&%$#_{}])"
+        plain = re.sub(escapes, "", title)
+        assert not set(plain) & set("\\^_&%$#~{}<>"), title
     assert "M (T = 1/2 v\\textasciicircum{}T M v)" in out
+    assert "\\paragraph{wall 'wall': gap psi (psi \\textgreater{}= 0 admissible)}" in out
 
 
 def test_show_carnot_3_7_text(tmp_path: Path):
@@ -303,12 +345,22 @@ def test_hostile_scene_file_is_refused_and_runs_nothing(tmp_path: Path):
         "m = 1\n",
         encoding="utf-8",
     )
-    for command in ("show", "export"):
-        proc = symmech(command, str(evil), cwd=tmp_path)
+    for command in (("show",), ("export",), ("derive", "--emit", "c", "-o", "out")):
+        proc = symmech(*command, str(evil), cwd=tmp_path)
         assert_one_line_error(
             proc, str(evil), "potential (line 3, col 1)", "__import__('os').system", "not allowed"
         )
+        assert proc.stdout == ""
     assert not marker.exists()
+    # derive stopped before writing anything
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["evil.toml"]
+
+
+def test_control_the_hostile_payload_would_create_the_marker(tmp_path: Path):
+    """The payload above is live: run by Python, it creates the marker file."""
+    marker = tmp_path / "PWNED_x"
+    proc = python("-c", f"__import__('os').system('touch {marker}')", cwd=tmp_path)
+    assert proc.returncode == 0 and marker.exists()
 
 
 def test_malformed_scene_file_is_one_readable_line(tmp_path: Path):
@@ -365,9 +417,7 @@ sys.exit(cli.main({argv!r}))
 def test_unexpected_failure_is_one_line(tmp_path: Path, exc: str, code: int, fragments: list[str]):
     """A failure inside a derivation (simulated: symmech has none on purpose) is one line."""
     script = _FAILING_DERIVATION.format(exc=exc, argv=["--quiet", "show", "car"])
-    proc = subprocess.run(
-        [sys.executable, "-c", script], cwd=tmp_path, capture_output=True, text=True, timeout=120
-    )
+    proc = python("-c", script, cwd=tmp_path)
     assert proc.returncode == code
     assert "Traceback" not in proc.stderr
     assert len(proc.stderr.splitlines()) == 1, proc.stderr
@@ -375,9 +425,7 @@ def test_unexpected_failure_is_one_line(tmp_path: Path, exc: str, code: int, fra
         assert fragment in proc.stderr
     debug = script.replace("'--quiet'", "'--debug', '--quiet'")
     if code == 3:
-        proc = subprocess.run(
-            [sys.executable, "-c", debug], cwd=tmp_path, capture_output=True, text=True, timeout=120
-        )
+        proc = python("-c", debug, cwd=tmp_path)
         assert proc.returncode != 0 and "Traceback (most recent call last)" in proc.stderr
 
 
@@ -498,3 +546,98 @@ def test_derive_refuses_an_unknown_strategy(tmp_path: Path):
     proc = symmech("derive", "car", "--strategy", "fastest", cwd=tmp_path)
     assert proc.returncode == 2
     assert "invalid choice" in proc.stderr
+
+
+# ---------------------------------------------------------------------------------------
+# terminals that cannot write Unicode
+
+
+def test_an_ascii_terminal_gets_escapes_not_a_crash(tmp_path: Path):
+    proc = symmech("examples", cwd=tmp_path, env={"PYTHONIOENCODING": "ascii"})
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.isascii()
+    names = [line.split(None, 1)[0] for line in proc.stdout.splitlines()]
+    assert set(REQUIRED_SCENES) <= set(names)
+    # "text 001 §3.1" with the section sign written as a backslash escape
+    assert "text 001 \\xa73.1" in proc.stdout
+    # verify's table names the examples with "§" too
+    proc = symmech("verify", "-k", "spinning", cwd=tmp_path, env={"PYTHONIOENCODING": "ascii"})
+    assert proc.returncode == 0, proc.stderr
+    assert re.search(r"^2 passed, 0 failed$", proc.stdout, re.M)
+
+
+def test_a_latin1_terminal_gets_ascii_pretty_printing(tmp_path: Path):
+    env = {"PYTHONIOENCODING": "latin-1"}
+    proc = symmech("--quiet", "show", "carnot_3_7", cwd=tmp_path, env=env, encoding="latin-1")
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    ascii_art = sp.pretty(sp.diag(M, M, M * K**2), use_unicode=False, wrap_line=False)
+    assert ascii_art in proc.stdout
+    assert "⎡" not in proc.stdout and "θ" not in proc.stdout
+    # an error naming a file with non-Latin characters is still one line
+    missing = symmech("show", "θ/κ.toml", cwd=tmp_path, env=env, encoding="latin-1")
+    assert_one_line_error(missing, "\\u03b8/\\u03ba.toml: no such scene file")
+
+
+# ---------------------------------------------------------------------------------------
+# show for more than MAX_DETAILED_N coordinates
+
+# polar coordinates (r, th) and five free coordinates: 7 coordinates, and the Christoffel
+# symbols of the plane in polar coordinates (slides 000): Gamma^r_thth = -r,
+# Gamma^th_rth = 1/r; the free particle's acceleration r'' = r th'^2, th'' = -2 r' th'/r
+POLAR7 = (
+    'coordinates = ["r", "th", "z1", "z2", "z3", "z4", "z5"]\nmetric = [1, "r**2", 1, 1, 1, 1, 1]\n'
+)
+
+
+def test_show_says_what_it_leaves_out_and_full_prints_it(tmp_path: Path):
+    scene = tmp_path / "polar7.toml"
+    scene.write_text(POLAR7, encoding="utf-8")
+    proc = symmech("--quiet", "show", str(scene), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    for title in ("== Christoffel symbols\n", "== acceleration v_dot\n"):
+        section = out.split(title, 1)[1].split("\n\n", 1)[0]
+        assert section.startswith("not derived for n = 7 > 6 coordinates ("), section
+        assert "'symmech show --full'" in section
+    assert "Gamma^" not in out
+    full = symmech("--quiet", "show", str(scene), "--full", cwd=tmp_path)
+    assert full.returncode == 0, full.stderr
+    r = sp.Symbol("r", real=True)
+    rd, thd = (sp.Symbol(s, real=True) for s in ("rdot", "thdot"))
+    assert f"Gamma^r_th,th = {_pretty(-r)}\n" in full.stdout
+    assert f"Gamma^th_r,th = {_pretty(1 / r)}\n" in full.stdout
+    accel = sp.Matrix([r * thd**2, -2 * rd * thd / r, 0, 0, 0, 0, 0])
+    assert f"== acceleration v_dot\n{_pretty(accel)}\n" in full.stdout
+    assert "not derived" not in full.stdout
+    latex = symmech("--quiet", "show", str(scene), "--latex", cwd=tmp_path)
+    assert latex.returncode == 0, latex.stderr
+    note = "\\paragraph{Christoffel symbols}\nnot derived for n = 7 \\textgreater{} 6 coordinates"
+    assert note in latex.stdout
+
+
+# ---------------------------------------------------------------------------------------
+# commands of issue 5 that this version does not have
+
+
+@pytest.mark.parametrize(
+    ("args", "instead"),
+    [
+        (("simulate", "car", "--t-end", "1", "--plot", "out.png"), "symmech derive SCENE"),
+        (("--quiet", "simulate"), "no simulator yet"),
+        (("bench",), "python3 benchmarks/*.py"),
+        (("stress", "--seed", "1"), "symmech verify"),
+    ],
+    ids=["simulate", "simulate quiet", "bench", "stress"],
+)
+def test_unavailable_command_says_so_in_one_line(tmp_path: Path, args: tuple, instead: str):
+    proc = symmech(*args, cwd=tmp_path)
+    command = next(a for a in args if not a.startswith("-"))
+    line = assert_one_line_error(
+        proc, f"'{command}' is not available in this version of symmech", instead
+    )
+    assert "invalid choice" not in line
+    assert proc.stdout == ""
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
+    help_text = symmech("--help", cwd=tmp_path).stdout
+    assert "Not available in this version: simulate, bench, stress." in " ".join(help_text.split())

@@ -86,7 +86,10 @@ VALID = [
     ("x**64 + x**-64", x**64 + x**-64),
     ("10**40", sp.Integer(10) ** 40),
     ("1" * MAX_DIGITS, sp.Integer("1" * MAX_DIGITS)),
-    ("x # a comment", x),
+    # a line break is whitespace, also outside brackets (a TOML multi-line string)
+    ("m*g*y\n + 1000*x", m * g * y + 1000 * x),
+    ("\n  m*g*y\r\n  - x\n\n  + 2\n", m * g * y - x + 2),
+    ("sin(\nx)\n*\ny", sp.sin(x) * y),
 ]
 
 
@@ -120,6 +123,43 @@ def test_symbol_table_values_and_shadowing():
 def test_unicode_names():
     theta_u = sp.Symbol("θ", real=True)
     assert parse_expression("cos(θ)**2", {"θ": theta_u}) == sp.cos(theta_u) ** 2
+    assert parse_expression("θ + 1", None) == sp.Symbol("θ", real=True) + 1
+    # a name declared with characters that NFKC changes means that symbol when typed so
+    bold = sp.Symbol("\U0001d431", real=True)
+    assert parse_expression("\U0001d431**2", {"\U0001d431": bold, "x": x}) == bold**2
+
+
+def test_a_hash_never_shortens_an_expression():
+    """Python would read "m*g*y # +1000*x" as m*g*y: refused, with field, line and column."""
+    with pytest.raises(ExpressionError) as info:
+        parse_expression("m*g*y # +1000*x", SYMBOLS, field="potential", line=3)
+    assert str(info.value).startswith("potential (line 3, col 7): character '#'")
+    assert (info.value.line, info.value.column, info.value.token) == (3, 7, "#")
+    with pytest.raises(ExpressionError) as info:
+        parse_expression("(x +\n  y) # z", SYMBOLS, field="potential", line=3)
+    assert (info.value.line, info.value.column) == (4, 6)
+
+
+def test_homoglyph_names_are_refused_with_their_position():
+    with pytest.raises(ExpressionError) as info:
+        parse_expression("y + \U0001d431**2", SYMBOLS, field="potential")
+    assert str(info.value).startswith("potential (col 5): name '\U0001d431'")
+    assert info.value.column == 5 and info.value.token == "\U0001d431"
+    for table in (SYMBOLS, None):
+        with pytest.raises(ExpressionError, match="reads as 'x'"):
+            parse_expression("\uff58", table)
+
+
+def test_multiline_text_positions_are_those_of_the_physical_lines():
+    text = "\n  m*g*y\n  + x.real\n"
+    with pytest.raises(ExpressionError) as info:
+        parse(text, field="potential", line=10)
+    assert str(info.value).startswith("potential (line 12, col 5): attribute access 'x.real'")
+    # a line break between two operands is not a product
+    with pytest.raises(ExpressionError) as info:
+        parse("x\ny", field="potential")
+    assert (info.value.line, info.value.column, info.value.token) == (2, 1, "y")
+    assert "syntax error" in str(info.value)
 
 
 def test_symbols_none_accepts_any_identifier_as_real_symbol():
@@ -215,6 +255,27 @@ HOSTILE = [
     ("await x", ["await", "await x"]),
     ("x.real", ["attribute access", "x.real"]),
     ("+".join(["x"] * 1100), ["max_nodes"]),
+    # characters Python would drop or reinterpret, and characters of no expression
+    ("m*g*y # +1000*x", ["character '#'", "comment"]),
+    ("x #", ["character '#'"]),
+    ("x + \\\n y", ["character '\\'"]),
+    ("x $ y", ["character '$'"]),
+    ("x ? y", ["character '?'"]),
+    ("x ! y", ["character '!'"]),
+    ("`x`", ["character '`'"]),
+    ("x +\x0by", ["U+000B"]),
+    ("x +\x0cy", ["U+000C"]),
+    ("x\u00a0+ y", ["U+00A0", "NO-BREAK SPACE"]),
+    ("x\u200b+ y", ["U+200B", "ZERO WIDTH SPACE"]),
+    ("x + y\u202e", ["U+202E", "RIGHT-TO-LEFT OVERRIDE"]),
+    ("x \uff0b y", ["U+FF0B", "FULLWIDTH PLUS SIGN"]),
+    ("x\u2028+ y", ["U+2028"]),
+    # names that Python's NFKC normalisation would silently turn into declared names
+    ("\U0001d431**2", ["name '\U0001d431'", "U+1D431", "reads as 'x'"]),
+    ("\uff58 + 1", ["name '\uff58'", "U+FF58", "reads as 'x'"]),
+    ("x\u00b2", ["U+00B2"]),
+    ("\uff53\uff49\uff4e(x)", ["U+FF53", "reads as 'sin'"]),
+    ("\u212bx", ["U+212B"]),
 ]
 
 

@@ -1,7 +1,9 @@
 """The notebooks in ``notebooks/`` (issue 5) are executed here, so none can rot.
 
 Each notebook runs top to bottom in a fresh ``python3`` Jupyter kernel (nbclient), with
-``notebooks/`` as the working directory and a timeout per cell; its cells check their
+``notebooks/`` as the working directory, this working tree first on the kernel's
+``PYTHONPATH`` (so the notebooks test the code next to them, not an installed copy of
+symmech) and a timeout per cell; its cells check their
 results against the texts with ``assert``, so a failing check fails the test, which reports
 the failing cell's source and error.  Nothing is skipped: a missing kernel or a missing
 nbclient/nbformat is a failure with instructions.  The notebooks must also be stored without
@@ -10,12 +12,14 @@ outputs, so that their diffs stay small.
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
 import pytest
 
-NOTEBOOK_DIR = Path(__file__).resolve().parent.parent / "notebooks"
+ROOT = Path(__file__).resolve().parent.parent
+NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 KERNEL = "python3"
 CELL_TIMEOUT = 120  # seconds per cell; each notebook as a whole should take well under 30 s
@@ -84,13 +88,18 @@ def test_notebook_is_stored_without_outputs(path: Path):
     )
 
 
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
-def test_notebook_executes(path: Path):
+def _kernel_env() -> dict[str, str]:
+    """The kernel's environment: this working tree first on PYTHONPATH."""
+    path = os.environ.get("PYTHONPATH")
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), *([path] if path else [])])}
+
+
+def _execute(nb, name: str) -> None:
+    """Run ``nb`` in place in a fresh kernel; fail with the failing cell's report."""
     _, nbclient = _nb_modules()
     from nbclient.exceptions import CellExecutionError, CellTimeoutError
 
     _require_kernel()
-    nb = _read(path)
     client = nbclient.NotebookClient(
         nb,
         timeout=CELL_TIMEOUT,
@@ -99,14 +108,29 @@ def test_notebook_executes(path: Path):
     )
     report = None
     try:
-        client.execute()
+        client.execute(env=_kernel_env())
     except (CellExecutionError, CellTimeoutError) as exc:
-        report = _failure_report(path, nb, exc)
+        report = _failure_report(name, nb, exc)
     if report is not None:  # outside the except block: no chained nbclient traceback
         pytest.fail(report, pytrace=False)
 
 
-def _failure_report(path: Path, nb, exc: Exception) -> str:
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
+def test_notebook_executes(path: Path):
+    _execute(_read(path), path.name)
+
+
+def test_the_kernel_imports_this_working_tree():
+    """The notebooks run against the symmech next to them, not an installed copy."""
+    nbformat, _ = _nb_modules()
+    nb = nbformat.v4.new_notebook()
+    nb.cells.append(nbformat.v4.new_code_cell("import symmech\nprint(symmech.__file__)"))
+    _execute(nb, "probe")
+    (output,) = nb.cells[0].outputs
+    assert Path(output["text"].strip()) == ROOT / "symmech" / "__init__.py"
+
+
+def _failure_report(name: str, nb, exc: Exception) -> str:
     """The failing cell (index and source) and its error, without terminal colours."""
     for index, cell in enumerate(nb.cells):
         errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
@@ -114,8 +138,8 @@ def _failure_report(path: Path, nb, exc: Exception) -> str:
             err = errors[0]
             trace = _ANSI.sub("", "\n".join(err.get("traceback", [])))
             return (
-                f"{path.name}: cell {index} failed\n"
+                f"{name}: cell {index} failed\n"
                 f"----- cell source -----\n{cell.source}\n"
                 f"----- error -----\n{err.get('ename')}: {err.get('evalue')}\n{trace}"
             )
-    return f"{path.name}: execution failed\n{_ANSI.sub('', str(exc))}"
+    return f"{name}: execution failed\n{_ANSI.sub('', str(exc))}"

@@ -17,6 +17,17 @@ expression is built from it, node by node:
   only, in the right number.  In call position a name always means the function (a symbol
   named ``sin`` is still usable as a bare ``sin``).
 
+Before Python's parser sees the text, its characters are checked, so that nothing in it is
+silently dropped or changed: ``#`` (Python would read the rest of the line as a comment and
+drop it: ``"m*g*y # +1000*x"`` would be ``m*g*y``), ``\\`` (a line continuation), ``$ ? !``
+and backquotes, control characters other than tabs and line breaks, and non-ASCII characters
+that cannot be part of a name (a no-break space, a zero-width joiner, a bidirectional
+override, a fullwidth ``＋``) are refused with their position.  A name must be written as
+Python reads it: Python NFKC-normalises identifiers, so ``𝐱`` or a fullwidth ``ｘ`` would
+silently mean ``x``; such a name is refused unless it is itself a key of ``symbols``
+(names such as ``θ``, unchanged by NFKC, are allowed).  A line break is whitespace: an
+expression may span lines (a TOML multi-line string) without brackets.
+
 Everything else (attribute access, subscripts, lambdas, comprehensions, comparisons,
 boolean operators, conditional expressions, f-strings, ``:=``, starred arguments, keyword
 arguments, container literals, calls of any other name, ...) is refused with an
@@ -49,6 +60,7 @@ import math
 import numbers
 import operator
 import re
+import unicodedata
 import warnings
 from collections.abc import Callable, Mapping
 from types import MappingProxyType
@@ -169,6 +181,16 @@ _FORBIDDEN: dict[type, str] = {
 _UNDEFINED = (sp.zoo, sp.nan, sp.oo, -sp.oo)
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")
 _SNIPPET_MAX = 60
+# ASCII characters refused before parsing (Python drops what follows '#', joins lines at
+# '\\'; the others are not part of any expression) and why.
+_REFUSED_CHARACTERS = {
+    "#": "a comment would silently drop the rest of the line",
+    "\\": "a line continuation is not needed: a line break is whitespace",
+    "$": "it is not part of an expression",
+    "?": "it is not part of an expression",
+    "!": "it is not part of an expression",
+    "`": "it is not part of an expression",
+}
 
 
 def _bits(r: sp.Rational) -> int:
@@ -257,6 +279,16 @@ class _Source:
             return byte_col
         encoded = self.lines[lineno - 1].encode("utf-8")
         return len(encoded[:byte_col].decode("utf-8", errors="replace"))
+
+    def raw(self, node: ast.AST) -> str | None:
+        """The text of a one-line ``node`` exactly as written (None if it spans lines)."""
+        lineno, end_lineno = getattr(node, "lineno", None), getattr(node, "end_lineno", None)
+        col, end_col = getattr(node, "col_offset", None), getattr(node, "end_col_offset", None)
+        if None in (lineno, col, end_col) or lineno != end_lineno or lineno > len(self.lines):
+            return None
+        if self._encoded is None:
+            self._encoded = [line.encode("utf-8") for line in self.lines]
+        return self._encoded[lineno - 1][col:end_col].decode("utf-8", errors="replace")
 
     def snippet(self, node: ast.AST) -> str:
         """The text of ``node`` (whitespace collapsed, shortened)."""
@@ -369,6 +401,7 @@ class _Parser:
             self._check_constant(node)
             return []
         if isinstance(node, ast.Name):
+            self._check_name_text(node)
             return []
         if isinstance(node, ast.BinOp):
             if type(node.op) not in _GROUPS and not isinstance(node.op, ast.Pow):
@@ -419,9 +452,32 @@ class _Parser:
             return
         refuse("literal '{snippet}' is not allowed")  # pragma: no cover
 
+    def _check_name_text(self, node: ast.Name) -> None:
+        """Refuse a name that Python's parser changed (NFKC normalisation: ``𝐱`` is ``x``).
+
+        A name typed exactly as a key of ``symbols`` is kept (it means that symbol).
+        """
+        if self.src.text.isascii():
+            return
+        typed = self.src.raw(node)
+        if typed is None or typed == node.id:
+            return
+        if self.symbols is not None and typed in self.symbols:
+            return
+        codes = ", ".join(f"U+{ord(c):04X}" for c in typed if not c.isascii())
+        self.src.fail(
+            node,
+            f"name '{_shorten(typed)}' is written with characters ({codes}) that Python reads"
+            f" as '{_shorten(node.id)}' (Unicode compatibility normalisation); write the name"
+            " with the characters it was declared with",
+            _shorten(typed),
+        )
+
     def _check_call(self, node: ast.Call) -> list[ast.expr]:
         src = self.src
         func = node.func
+        if isinstance(func, ast.Name):
+            self._check_name_text(func)
         if isinstance(func, ast.Name) and func.id in ALLOWED_FUNCTIONS and not node.keywords:
             arity = _ARITY.get(func.id, 1)
             if len(node.args) == arity and not any(isinstance(a, ast.Starred) for a in node.args):
@@ -434,14 +490,14 @@ class _Parser:
         if name not in ALLOWED_FUNCTIONS:
             allowed = ", ".join(sorted(ALLOWED_FUNCTIONS))
             if self.symbols is not None and name in self.symbols:
-                what = f"'{name}' is a symbol, not a function: '{snippet}' is not allowed"
+                what = f"'{_shorten(name)}' is a symbol, not a function: '{snippet}' is not allowed"
             else:
-                what = f"function '{name}' is not allowed in '{snippet}'"
+                what = f"function '{_shorten(name)}' is not allowed in '{snippet}'"
             src.fail(
                 func,
                 f"{what} (allowed functions: {allowed})"
                 f"{_did_you_mean(name, list(ALLOWED_FUNCTIONS))}",
-                name,
+                _shorten(name),
             )
         if node.keywords:
             kw = node.keywords[0]
@@ -483,12 +539,12 @@ class _Parser:
     def _name(self, node: ast.Name) -> sp.Expr:
         src, name = self.src, node.id
         if self.symbols is not None:
+            if not src.text.isascii():  # Python NFKC-normalises names: the text as typed first
+                typed = src.raw(node)
+                if typed is not None and typed != name and typed in self.symbols:
+                    return self._symbol_value(node, typed, self.symbols[typed])
             if name in self.symbols:
                 return self._symbol_value(node, name, self.symbols[name])
-            if not name.isascii():  # Python NFKC-normalises identifiers; try the text as typed
-                typed = src.snippet(node)
-                if typed in self.symbols:
-                    return self._symbol_value(node, typed, self.symbols[typed])
         if name in ALLOWED_CONSTANTS:
             return ALLOWED_CONSTANTS[name]
         if name in ALLOWED_FUNCTIONS:
@@ -499,7 +555,7 @@ class _Parser:
             )
         if self.symbols is None:
             if name.startswith("__"):
-                src.fail(node, f"name '{name}' is not allowed", name)
+                src.fail(node, f"name '{_shorten(name)}' is not allowed", _shorten(name))
             return sp.Symbol(name, real=True)
         declared = [k for k in self.symbols if isinstance(k, str)]
         candidates = declared + list(ALLOWED_CONSTANTS)
@@ -509,7 +565,8 @@ class _Parser:
             known = "declared: " + ", ".join(sorted(declared))
         else:
             known = f"{len(declared)} symbols declared"
-        src.fail(node, f"unknown name '{name}' ({known}){_did_you_mean(name, candidates)}", name)
+        shown = _shorten(name)
+        src.fail(node, f"unknown name '{shown}' ({known}){_did_you_mean(name, candidates)}", shown)
 
     def _symbol_value(self, node: ast.Name, key: str, value: object) -> sp.Expr:
         if isinstance(value, sp.Expr) and not isinstance(value, sp.MatrixBase | sp.MatrixExpr):
@@ -672,6 +729,51 @@ def _check_brackets(src: _Source, max_depth: int) -> None:
                 depth = max(0, depth - 1)
 
 
+def _check_characters(src: _Source) -> None:
+    """Refuse the characters Python would drop or reinterpret, and those of no expression.
+
+    See the module documentation: ``#`` and ``\\`` (a comment, a line continuation), ``$ ? !``
+    and backquotes, control characters but tabs, and non-ASCII characters that cannot be
+    part of a name.  Line breaks are not in ``src.lines``.
+    """
+    for lineno, line in enumerate(src.lines, start=1):
+        if line.isascii() and line.isprintable() and not any(c in line for c in "#\\$?!`"):
+            continue  # the common case, checked at C speed
+        for col, ch in enumerate(line):
+            if ch in _REFUSED_CHARACTERS:
+                why = _REFUSED_CHARACTERS[ch]
+            elif ch == "\t" or (" " <= ch <= "~"):
+                continue
+            elif ch == "\x00":
+                why = "null character in the text"
+                raise src.error(why, lineno=lineno, char_col=col, token="\\x00")
+            elif ch.isascii() or not ("a" + ch).isidentifier():
+                name = unicodedata.name(ch, "a control character")
+                token = f"U+{ord(ch):04X}"
+                raise src.error(
+                    f"character {token} ({name}) is not allowed: an expression is written with"
+                    " letters, digits, _ . + - * / ( ) , and spaces",
+                    lineno=lineno,
+                    char_col=col,
+                    token=token,
+                )
+            else:
+                continue
+            raise src.error(
+                f"character '{ch}' is not allowed: {why}", lineno=lineno, char_col=col, token=ch
+            )
+
+
+def _joined(src: _Source) -> str:
+    """The text for Python's parser: a line break is whitespace (explicit line joining).
+
+    Each line but the last ends with `` \\``, so the parser reads one logical line while the
+    positions it reports stay those of the physical lines (and of their characters).
+    """
+    lines = _LINE_BREAK.split(src.text.rstrip())
+    return " \\\n".join(lines)
+
+
 def _syntax_error(src: _Source, exc: SyntaxError) -> ExpressionError:
     lineno = exc.lineno if exc.lineno and exc.lineno >= 1 else None
     char_col = exc.offset - 1 if lineno is not None and exc.offset and exc.offset >= 1 else None
@@ -757,10 +859,7 @@ def parse_expression(
             f"expression is {len(text)} characters long (limit max_length={max_length})"
         )
     src = _Source(text, field, line)
-    for lineno, line_text in enumerate(src.lines, start=1):
-        bad = next((i for i, ch in enumerate(line_text) if ch == "\x00"), None)
-        if bad is not None:
-            raise src.error("null character in the text", lineno=lineno, char_col=bad)
+    _check_characters(src)
     if not src.text.strip():
         raise src.error("empty expression")
     _check_brackets(src, max_depth)
@@ -770,7 +869,7 @@ def parse_expression(
             # becomes a SyntaxError), and nothing leaks to the caller's warnings.
             warnings.simplefilter("error", SyntaxWarning)
             warnings.simplefilter("ignore", DeprecationWarning)
-            tree = ast.parse(src.text, mode="eval")
+            tree = ast.parse(_joined(src), mode="eval")
     except SyntaxError as exc:
         raise _syntax_error(src, exc) from None
     except (RecursionError, MemoryError):
