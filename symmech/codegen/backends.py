@@ -9,7 +9,8 @@ Adding a backend is a recipe (SymForce style):
 
 Templates are rendered by a strict Jinja environment (``StrictUndefined``, ``trim_blocks``,
 ``lstrip_blocks``, ``keep_trailing_newline``); every output file starts with a stamp naming
-its templates and saying it must not be edited.
+the templates it was rendered from (its template and those it includes or imports, see
+:func:`templates_used`) and saying it must not be edited.
 """
 
 from __future__ import annotations
@@ -21,11 +22,12 @@ from functools import cache
 from pathlib import Path
 
 import jinja2
+import jinja2.meta
 import sympy as sp
 
 from symmech.codegen.printers import SymmechCPrinter, SymmechNumPyPrinter
 
-__all__ = ["BACKENDS", "STEP_DOCS", "Backend", "environment", "template_root"]
+__all__ = ["BACKENDS", "STEP_DOCS", "Backend", "environment", "template_root", "templates_used"]
 
 #: One-line descriptions of the linear-algebra steps, printed in function headers.
 STEP_DOCS = {
@@ -119,3 +121,21 @@ def environment() -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+
+
+@cache
+def templates_used(template: str) -> tuple[str, ...]:
+    """``template`` and every template it includes or imports, recursively, in the order
+    first met (the templates an output file is rendered from)."""
+    env = environment()
+    order = [template]
+    i = 0
+    while i < len(order):
+        source = env.loader.get_source(env, order[i])[0]  # type: ignore[union-attr]
+        for ref in jinja2.meta.find_referenced_templates(env.parse(source)):
+            if ref is None:
+                raise ValueError(f"template {order[i]} references a template by a variable")
+            if ref not in order:
+                order.append(ref)
+        i += 1
+    return tuple(order)

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment
-from symmech.codegen.lower import LoweredFunction, Names, lower
+from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
+from symmech.codegen.lower import LoweredFunction, Names, comment_text, lower
 from symmech.codegen.plan import CodegenError, ScenePlan, build_plan
 from symmech.codegen.printers import identifier
 
@@ -73,8 +73,9 @@ class GeneratedCode:
     def load(self, **options: object) -> SceneModule:
         """Compile and load (C: gcc, cached shared library, ctypes) or import (NumPy).
 
-        C options: ``compiler``, ``flags``, ``cache_dir`` (see
-        :func:`symmech.codegen.build.compile_library`).
+        Options: ``cache`` (the folder of compiled libraries and imported modules, see
+        :func:`symmech.codegen.build.cache_dir`), and for C ``compiler`` and ``flags``
+        (see :func:`symmech.codegen.build.compile_library`).
         """
         from symmech.codegen.module import load_generated
 
@@ -111,33 +112,33 @@ def generate(
         projectors=projectors,
     )
     names = Names.of(plan)
-    lowered = tuple(lower(f, plan, names, backend.make_printer, cse=cse) for f in plan.functions)
+    done: dict[str, LoweredFunction] = {}
+    for f in plan.functions:
+        callee = done[f.calls] if f.calls is not None else None
+        done[f.name] = lower(f, plan, names, backend.make_printer, cse=cse, callee=callee)
+    lowered = tuple(done.values())
+    omitted = (*plan.omitted, *_argument_notes(plan, lowered))
     scene_id = identifier(scene.name, "", set())
     stem = f"symmech_{scene_id}"
     from symmech import __version__
 
-    templates = [t for t, _ in backend.templates] + [
-        backend.function_template,
-        f"{backend.name}/linalg.{'c' if backend.name == 'c' else 'py'}.jinja",
-    ]
-    if backend.name == "c":
-        templates.insert(1, "c/macros.jinja")
     steps = sorted({f.step for f in lowered if f.step})
     context = {
-        "stamp": _stamp(__version__, templates),
-        "scene": scene.name,
+        "scene": comment_text(scene.name),
         "n": plan.n,
         "m": plan.m,
-        "walls": list(plan.walls),
+        "walls": [comment_text(repr(w)) for w in plan.walls],
         "strategy": plan.strategy,
-        "coordinates": [str(s) for s in plan.coordinates],
-        "velocities": [str(s) for s in plan.velocities],
-        "parameters": [str(s) for s in plan.parameters],
-        "inputs": [str(a) for _, a in plan.inputs],
+        "coordinates": [comment_text(str(s)) for s in plan.coordinates],
+        "velocities": [comment_text(str(s)) for s in plan.velocities],
+        "parameters": [comment_text(str(s)) for s in plan.parameters],
+        "inputs": [comment_text(str(a)) for _, a in plan.inputs],
         "n_inputs": len(plan.inputs),
-        "constants": [f"{s} = {v}" for s, v in plan.constants],
+        "constants": [comment_text(f"{s} = {v}") for s, v in plan.constants],
         "uses_time": any(f.takes_time for f in lowered),
-        "omitted": list(plan.omitted),
+        "uses_parameters": any(f.takes_parameters for f in lowered),
+        "uses_inputs": any(f.takes_inputs for f in lowered),
+        "omitted": [comment_text(o) for o in omitted],
         "functions": list(lowered),
         "callees": {f.name: f for f in lowered},
         "steps": steps,
@@ -149,7 +150,9 @@ def generate(
     }
     env = environment()
     files = {
-        filename: env.get_template(template).render(**context)
+        filename: env.get_template(template).render(
+            stamp=_stamp(__version__, templates_used(template)), **context
+        )
         for template, filename in backend.templates_to_render(stem)
     }
     return GeneratedCode(
@@ -159,5 +162,30 @@ def generate(
         files=files,
         plan=plan,
         functions=lowered,
-        omitted=plan.omitted,
+        omitted=omitted,
     )
+
+
+def _argument_notes(plan: ScenePlan, lowered: Sequence[LoweredFunction]) -> list[str]:
+    """Which functions leave out the arguments p, t, u (they read none of them), and which
+    take a state array they do not read (it only fixes the batch shape)."""
+    notes = []
+    present = [
+        ("p", "parameter argument p", bool(plan.parameters), "takes_parameters"),
+        ("t", "time argument t", True, "takes_time"),
+        ("u", "input argument u", bool(plan.inputs), "takes_inputs"),
+    ]
+    for _, what, exists, attr in present:
+        if not exists:
+            continue
+        without = [f.name for f in lowered if not getattr(f, attr)]
+        if without and len(without) == len(lowered) and attr != "takes_time":
+            notes.append(f"{what}: no function reads it")
+        elif without and len(without) < len(lowered):
+            notes.append(f"{what} left out of {', '.join(without)}: they do not read it")
+    unread = [f"{f.name} ({', '.join(f.unused)})" for f in lowered if f.unused]
+    if unread:
+        notes.append(
+            "state arrays taken but not read (they fix the batch shape): " + ", ".join(unread)
+        )
+    return notes

@@ -1,10 +1,17 @@
 """Lowering a :class:`~symmech.codegen.plan.FunctionPlan` to printed lines for a template.
 
 One common-subexpression elimination (:func:`sympy.cse`) runs over *all* block entries
-of a function; the temporaries and the entries are printed by the backend's printer
-(:mod:`symmech.codegen.printers`) after :func:`~symmech.codegen.printers.safe_rewrite`.
-The result is a frozen :class:`LoweredFunction` of already-printed lines: templates only
-lay them out.
+of a function, after :func:`~symmech.codegen.printers.safe_rewrite` and
+:func:`~symmech.codegen.printers.fold_numbers`; the compound base of a power printed as a
+product (``(a + b)**3``) then gets a temporary of its own, so it is evaluated once.  The
+temporaries and the entries are printed by the backend's printer
+(:mod:`symmech.codegen.printers`).  The result is a frozen :class:`LoweredFunction` of
+already-printed lines: templates only lay them out.
+
+A generated function takes its state arrays (``q``, ``v``, or ``y``: they fix the batch
+shape; C marks one it does not read ``(void)``) and, only when it reads them, the
+run-time parameters ``p``, the time ``t`` and the inputs ``u`` (``rhs`` takes those its
+call of ``acceleration`` needs).
 
 Linear-algebra steps (:data:`~symmech.codegen.plan.STEPS`), implemented once per backend
 in its ``linalg`` template, all with Cholesky factorisations ``A = L L^T``:
@@ -18,20 +25,30 @@ in its ``linalg`` template, all with Cholesky factorisations ``A = L L^T``:
                               ``nu V = -psi_t G[i, m] / G[m, m]``, ``out = v + Y G^-1 r``
                               (the impulse-momentum system of the Carnot paper, eqs. 6,
                               15 and 20, by its Schur complement)
+
+:func:`step_flops` counts the floating-point operations of each step as the templates
+write it; the header of every function states them next to its operation count.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 
 import sympy as sp
 
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
-from symmech.codegen.printers import identifier, safe_rewrite
+from symmech.codegen.printers import fold_numbers, identifier, product_power, safe_rewrite
 from symmech.declaration.symbols import t as TIME
 
-__all__ = ["LoweredFunction", "Names", "lower"]
+__all__ = ["LoweredFunction", "Names", "comment_text", "lower", "step_flops"]
+
+
+def comment_text(text: str) -> str:
+    """``text`` made safe inside a C block comment and a Python docstring: one line, no
+    ``*/``, no triple quote, backslashes doubled (a docstring shows them once)."""
+    text = " ".join(str(text).split())
+    return text.replace("\\", "\\\\").replace("*/", "* /").replace('"' * 3, "'" * 3)
 
 
 @dataclass(frozen=True)
@@ -68,12 +85,13 @@ class LoweredFunction:
     doc: str
     equation: str
     wall: str | None
+    wall_index: int | None
     state: tuple[str, ...]
     takes_parameters: bool
     takes_time: bool
     takes_inputs: bool
     unpack: tuple[tuple[str, int, str], ...]  # (array "q"/"v"/"p"/"u", index, local name)
-    unused: tuple[str, ...]  # argument arrays the function does not read
+    unused: tuple[str, ...]  # state arrays the function does not read
     temporaries: tuple[tuple[str, str], ...]  # (name, printed expression)
     blocks: tuple[tuple[str, int], ...]  # local arrays: (name, size), excluding "out"
     assignments: tuple[tuple[str, int, str, tuple[int, ...]], ...]  # (block, flat, expr, idx)
@@ -85,7 +103,79 @@ class LoweredFunction:
     out_size: int
     operations: int
     n_temporaries: int
+    solve_flops: int = 0  # of the step, see step_flops
+    cost: str = ""  # the header's cost line: operations, temporaries, solve, call
     expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
+
+    @property
+    def arguments(self) -> tuple[str, ...]:
+        """The argument names in order: the state arrays, then p, t, u if taken."""
+        extra = (
+            ("p",) * self.takes_parameters + ("t",) * self.takes_time + ("u",) * self.takes_inputs
+        )
+        return (*self.state, *extra)
+
+
+# ---------------------------------------------------------------------- operation counts
+
+
+def _cholesky_flops(n: int) -> int:
+    """sm_cholesky: column j costs 2j + 2 (its diagonal, the sqrt and the reciprocal)
+    and 2j + 1 for each of the n - 1 - j rows below it."""
+    return sum(2 * j + 2 + (n - 1 - j) * (2 * j + 1) for j in range(n))
+
+
+def _factor_flops(n: int, diag: int) -> int:
+    """A diagonal metric is only checked (its solve divides by the diagonal)."""
+    return 0 if diag else _cholesky_flops(n)
+
+
+def _factor_solve_flops(n: int, diag: int, r: int) -> int:
+    """Forward and back substitution cost n^2 each per column; a diagonal metric n r
+    divisions."""
+    return n * r if diag else 2 * n * n * r
+
+
+def step_flops(step: str | None, args: tuple[int, ...]) -> int:
+    """Floating-point operations (+ - * / sqrt, one each) of a linear-algebra step as the
+    templates write it, for the sizes ``args`` of :class:`~symmech.codegen.plan.FunctionPlan`.
+
+    ``spd_solve`` (n, diag): factor and one solve.  ``constrained_*`` (n, m, diag): factor,
+    a solve with m + 1 columns, ``C = mu X_mu`` (2 n m^2) and ``mu X_f`` (2 n m), the
+    Cholesky factorisation of C and one solve (2 m^2), and for the acceleration
+    ``X_f + X_mu lambda`` (2 n m).  ``impact_kkt`` (n, k, m, diag): factor, a solve with
+    k columns, ``A v`` (2 n k), ``G = A Y`` (2 n k^2), the right-hand side (3 per row
+    from row m on), the Cholesky factorisation of G and one solve (2 k^2), and
+    ``v + Y lambda`` (2 n k).
+    """
+    if step is None:
+        return 0
+    if step == "spd_solve":
+        n, diag = args
+        return _factor_flops(n, diag) + _factor_solve_flops(n, diag, 1)
+    if step in ("constrained_acceleration", "constrained_multipliers"):
+        n, m, diag = args
+        out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, m + 1)
+        out += 2 * n * m * m + 2 * n * m + _cholesky_flops(m) + 2 * m * m
+        return out + (2 * n * m if step == "constrained_acceleration" else 0)
+    if step == "impact_kkt":
+        n, k, m, diag = args
+        out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, k)
+        out += 2 * n * k + 2 * n * k * k + 3 * (k - m) + _cholesky_flops(k) + 2 * k * k
+        return out + 2 * n * k
+    raise CodegenError(f"unknown linear-algebra step {step!r}")
+
+
+def _step_sizes(step: str, args: tuple[int, ...]) -> str:
+    diag = ", diagonal metric" if args[-1] else ""
+    if step == "spd_solve":
+        return f"n = {args[0]}{diag}"
+    if step == "impact_kkt":
+        return f"n = {args[0]}, k = {args[1]}{diag}"
+    return f"n = {args[0]}, m = {args[1]}{diag}"
+
+
+# ----------------------------------------------------------------------------- lowering
 
 
 def _unpack_entries(names: Names, used: set[str]) -> tuple[tuple[str, int, str], ...]:
@@ -97,6 +187,45 @@ def _unpack_entries(names: Names, used: set[str]) -> tuple[tuple[str, int, str],
     return tuple(out)
 
 
+def _name_power_bases(
+    replacements: list[tuple[sp.Symbol, sp.Expr]],
+    exprs: list[sp.Expr],
+    symbols: Iterator[sp.Symbol],
+) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
+    """Give the compound base of every power printed as a product a temporary, placed
+    just before its first use, so ``(a + b)**3`` evaluates ``a + b`` once."""
+    named: dict[sp.Expr, sp.Symbol] = {}
+    pending: list[tuple[sp.Symbol, sp.Expr]] = []
+
+    def visit(e: sp.Expr) -> sp.Expr:
+        if e.is_Atom:
+            return e
+        args = tuple(visit(a) for a in e.args)
+        if args != e.args:
+            e = e.func(*args)
+        if (
+            e.is_Pow
+            and not e.base.is_Atom
+            and product_power(e.exp)
+            and e.exp not in (sp.S.Half, -sp.S.Half, sp.S.NegativeOne)
+        ):
+            if e.base not in named:
+                named[e.base] = next(symbols)
+                pending.append((named[e.base], e.base))
+            e = sp.Pow(named[e.base], e.exp)
+        return e
+
+    out: list[tuple[sp.Symbol, sp.Expr]] = []
+    for s, e in replacements:
+        e = visit(e)
+        out.extend(pending)
+        pending.clear()
+        out.append((s, e))
+    new_exprs = [visit(e) for e in exprs]
+    out.extend(pending)
+    return out, new_exprs
+
+
 def lower(
     f: FunctionPlan,
     plan: ScenePlan,
@@ -104,8 +233,12 @@ def lower(
     make_printer: Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer],
     *,
     cse: bool = True,
+    callee: LoweredFunction | None = None,
 ) -> LoweredFunction:
-    """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer)."""
+    """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer);
+    ``callee`` is the lowered function that ``f`` calls (``rhs``: ``acceleration``)."""
+    if f.calls is not None and (callee is None or callee.name != f.calls):
+        raise CodegenError(f"{f.name} calls {f.calls}: lower it first and pass it as callee")
     entries: list[sp.Expr] = []
     where: list[tuple[str, int, tuple[int, ...]]] = []
     for b in f.blocks:
@@ -116,6 +249,10 @@ def lower(
                     f"{f.name}: {b.name}[{flat}] is not finite ({e}); the closed form is"
                     " singular for every state"
                 )
+            try:
+                e = fold_numbers(e)
+            except ValueError as exc:
+                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {exc}") from None
             entries.append(e)
             if not b.shape:
                 idx: tuple[int, ...] = ()
@@ -125,12 +262,12 @@ def lower(
                 idx = divmod(flat, b.shape[1])
             where.append((b.name, flat, tuple(idx)))
     nonconst = [i for i, e in enumerate(entries) if not e.is_number]
+    symbols = sp.numbered_symbols("tmp", real=True)
     if cse and nonconst:
         replacements, reduced = sp.cse(
-            [entries[i] for i in nonconst],
-            symbols=sp.numbered_symbols("tmp", real=True),
-            order="canonical",
+            [entries[i] for i in nonconst], symbols=symbols, order="canonical"
         )
+        replacements, reduced = _name_power_bases(replacements, reduced, symbols)
     else:
         replacements, reduced = [], [entries[i] for i in nonconst]
     final = list(entries)
@@ -151,8 +288,9 @@ def lower(
     assignments = tuple(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
     )
-    ops = sum(sp.count_ops(e) for _, e in replacements) + sum(
-        sp.count_ops(e) for e in final if not e.is_number
+    ops = int(
+        sum(sp.count_ops(e) for _, e in replacements)
+        + sum(sp.count_ops(e) for e in final if not e.is_number)
     )
     used_syms: set = set()
     for _, e in replacements:
@@ -161,35 +299,38 @@ def lower(
         used_syms |= e.free_symbols
     used = {names.table[s] for s in used_syms if s in names.table}
     unpack = _unpack_entries(names, used)
-    unused = []
-    read_kinds = {k for k, _, _ in unpack}
+    read = {k for k, _, _ in unpack}
     if f.step == "impact_kkt":
-        read_kinds.add("v")
+        read.add("v")
     if f.calls is not None:
-        read_kinds |= {"q", "v", "p"}
-    for arg in f.state:
-        if arg == "y":
-            continue
-        if arg not in read_kinds:
-            unused.append(arg)
-    if plan.parameters and "p" not in read_kinds:
-        unused.append("p")
-    if f.uses_inputs and "u" not in read_kinds and f.calls is None:
-        unused.append("u")
-    if f.uses_time and "t" not in {names.table.get(s) for s in used_syms} and f.calls is None:
-        unused.append("t")
+        read |= {"q", "v"}
+    unused = tuple(arg for arg in f.state if arg != "y" and arg not in read)
+    takes_p, takes_t, takes_u = f.uses_parameters, f.uses_time, f.uses_inputs
+    if callee is not None:
+        takes_p |= callee.takes_parameters
+        takes_t |= callee.takes_time
+        takes_u |= callee.takes_inputs
+    flops = step_flops(f.step, f.step_args)
+    cost = f"Operations after CSE: {ops} (sympy.count_ops); temporaries: {len(replacements)}"
+    if f.step:
+        cost += f"; solve: {flops} flops ({_step_sizes(f.step, f.step_args)})"
+    if callee is not None:
+        cost += f"; then the call of {callee.name}: {callee.operations} operations"
+        if callee.solve_flops:
+            cost += f" + {callee.solve_flops} flops"
     return LoweredFunction(
         name=f.name,
         kind=f.kind,
-        doc=f.doc,
-        equation=f.equation,
+        doc=comment_text(f.doc),
+        equation=comment_text(f.equation),
         wall=f.wall,
+        wall_index=f.wall_index,
         state=f.state,
-        takes_parameters=bool(plan.parameters),
-        takes_time=f.uses_time,
-        takes_inputs=f.uses_inputs,
+        takes_parameters=takes_p,
+        takes_time=takes_t,
+        takes_inputs=takes_u,
         unpack=unpack,
-        unused=tuple(unused),
+        unused=unused,
         temporaries=temporaries,
         blocks=tuple((b.name, b.size) for b in f.blocks if b.name != "out"),
         assignments=assignments,
@@ -199,7 +340,9 @@ def lower(
         calls=f.calls,
         out_shape=f.out_shape,
         out_size=f.out_size,
-        operations=int(ops),
+        operations=ops,
         n_temporaries=len(replacements),
+        solve_flops=flops,
+        cost=cost + ".",
         expressions=tuple(e for _, e in replacements) + tuple(final),
     )

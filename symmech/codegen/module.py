@@ -15,8 +15,12 @@ A state argument is an array of shape ``(n,)`` (one state) or ``(N, n)`` (a batc
 states; NumPy also accepts any leading shape); ``params`` is a sequence in the order of
 :attr:`SceneModule.parameters` or a mapping from their names; ``t`` and ``inputs`` (the
 values of the scene's arbitrary functions of time, :attr:`SceneModule.inputs`) are needed
-only by the functions that use them.  A failure at some state (a matrix that must be
-positive definite is not, or an output is not finite) raises :class:`NumericalError`.
+only by the functions that use them (``params`` too: a function that reads no parameter
+accepts ``params=None``).  The raw generated functions take only the arguments they read;
+this wrapper gives every function the same signature.  A wall is given by its index or
+its name (``wall="left wall"``; the generated names use the sanitised ``left_wall``).  A
+failure at some state (a matrix that must be positive definite is not, or an output is
+not finite) raises :class:`NumericalError`.
 """
 
 from __future__ import annotations
@@ -66,6 +70,7 @@ class SceneModule:
         self.walls = plan.walls
         self._raw = dict(raw)
         self._spec = {f.name: f for f in code.functions}
+        self._by_wall = {(f.kind, f.wall_index): f.name for f in code.functions if f.wall}
 
     @property
     def functions(self) -> tuple[str, ...]:
@@ -79,8 +84,10 @@ class SceneModule:
         )
 
     # -- argument handling ----------------------------------------------------------------
-    def _params(self, params: object) -> np.ndarray | None:
+    def _params(self, params: object, needed: bool = True) -> np.ndarray | None:
         k = len(self.parameters)
+        if not needed and params is None:
+            return None
         if k == 0:
             if params is not None and len(np.atleast_1d(params)) != 0:
                 raise CodegenError(
@@ -98,7 +105,7 @@ class SceneModule:
                     f"params: missing {missing}, unknown {extra}; expected {list(self.parameters)}"
                 )
             params = [values[p] for p in self.parameters]
-        p = np.asarray(params, dtype=np.float64)
+        p = np.ascontiguousarray(params, dtype=np.float64)
         if p.shape[-1:] != (k,):
             raise CodegenError(
                 f"params: expected {k} values {list(self.parameters)}, got shape {p.shape}"
@@ -119,7 +126,7 @@ class SceneModule:
                 f"{name} was not generated for scene {self.code.scene_name!r}"
                 + (f" ({'; '.join(reasons)})" if reasons else "")
             )
-        p = self._params(params)
+        p = self._params(params, spec.takes_parameters)
         if spec.takes_time and t is None:
             raise CodegenError(f"{name} depends on time: pass t=")
         u = None
@@ -177,36 +184,54 @@ class SceneModule:
         Q = self.call("projector_Q", q, params=params, t=t, inputs=inputs)
         return P, Q
 
-    def _wall(self, wall: int | str) -> str:
+    def _wall(self, wall: int | str) -> int:
+        """The index of a wall given by its index or its name."""
         if isinstance(wall, str):
-            if wall not in self.walls:
+            hits = [i for i, name in enumerate(self.walls) if name == wall]
+            if not hits:
                 raise CodegenError(f"no wall named {wall!r}; walls are {list(self.walls)}")
-            return wall
+            if len(hits) > 1:
+                raise CodegenError(f"walls {hits} are all named {wall!r}; pass the index")
+            return hits[0]
         if isinstance(wall, bool) or not isinstance(wall, int):
             raise CodegenError(f"wall must be an index or a name, got {wall!r}")
         if not -len(self.walls) <= wall < len(self.walls):
             raise CodegenError(f"wall index {wall} out of range: {len(self.walls)} walls")
-        return self.walls[wall]
+        return wall % len(self.walls)
+
+    def _wall_function(self, kind: str, wall: int | str) -> str:
+        index = self._wall(wall)
+        name = self._by_wall.get((kind, index))
+        if name is None:
+            raise CodegenError(
+                f"the {kind} function of wall {self.walls[index]!r} was not generated for"
+                f" scene {self.code.scene_name!r} (functions: {list(self._spec)})"
+            )
+        return name
 
     def psi(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
         """The gap psi(t, q) of a wall (admissible side psi >= 0)."""
-        return self.call(f"psi_{self._wall(wall)}", q, params=params, t=t, inputs=inputs)
+        name = self._wall_function("psi", wall)
+        return self.call(name, q, params=params, t=t, inputs=inputs)
 
     def dpsi(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
         """d psi / d q of a wall (coordinates)."""
-        return self.call(f"dpsi_{self._wall(wall)}", q, params=params, t=t, inputs=inputs)
+        name = self._wall_function("dpsi", wall)
+        return self.call(name, q, params=params, t=t, inputs=inputs)
 
     def psi_t(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
         """d psi / d t of a wall (zero for a static wall)."""
-        name = self._wall(wall)
-        if f"psi_t_{name}" not in self._spec:
-            q = np.asarray(q, dtype=np.float64)
+        index = self._wall(wall)
+        if not self.code.plan.moving_walls[index]:
+            q = self._state(q, self.n, "psi_t argument 0")
             return np.zeros(q.shape[:-1])
-        return self.call(f"psi_t_{name}", q, params=params, t=t, inputs=inputs)
+        name = self._wall_function("psi_t", index)
+        return self.call(name, q, params=params, t=t, inputs=inputs)
 
     def impact(self, q, v, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
         """The post-impact velocity v+ at a wall for the pre-impact velocity v."""
-        return self.call(f"impact_{self._wall(wall)}", q, v, params=params, t=t, inputs=inputs)
+        name = self._wall_function("impact", wall)
+        return self.call(name, q, v, params=params, t=t, inputs=inputs)
 
 
 # ---------------------------------------------------------------------------------------
@@ -222,9 +247,13 @@ def _numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
     shape_out = spec.out_shape
 
     def call(state, p, t, u):
+        args = list(state)
+        args += [p] if spec.takes_parameters else []
+        args += [t] if spec.takes_time else []
+        args += [u] if spec.takes_inputs else []
         try:
             with np.errstate(all="ignore"):
-                out = np.asarray(fn(*state, p, t, u), dtype=np.float64)
+                out = np.asarray(fn(*args), dtype=np.float64)
         except np.linalg.LinAlgError:
             raise _failed(spec.name, None, _STATUS[1]) from None
         bad = ~np.isfinite(out)
@@ -304,7 +333,7 @@ def _c_raw(
         return views[-1][:out_size].reshape(out_shape).copy()
 
     def call(state, p, t, u):
-        if p is not None and p.ndim != 1:
+        if spec.takes_parameters and p.ndim != 1:
             raise CodegenError(
                 f"{spec.name}: the C backend shares one parameter vector across a batch;"
                 f" got params of shape {p.shape}"

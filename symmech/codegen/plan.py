@@ -17,9 +17,18 @@ frame ``q_dot = S(q) v``; all equations cite :class:`~symmech.Scene`):
 ``energy``            T + V
 ``multipliers``       lambda of Carnot paper section 2.2 (constrained scenes)
 ``constraint_residual``  mu(q) v (constrained scenes)
-``psi_<wall>``, ``dpsi_<wall>``, ``psi_t_<wall>``  the guard psi(t, q), d psi/d q, d psi/d t
-``impact_<wall>``     v+ (Carnot paper eq. 10, Prop. 3.4, eq. 17, Prop. 4.2; text 001)
+``psi_<w>``, ``dpsi_<w>``, ``psit_<w>``  the guard psi(t, q), d psi/d q, d psi/d t
+``impact_<w>``        v+ (Carnot paper eq. 10, Prop. 3.4, eq. 17, Prop. 4.2; text 001)
 ``projector_P``, ``projector_Q``  Carnot paper section 2.2 (only when asked)
+
+Function names cannot collide.  ``<w>`` is the wall's name sanitised by
+:func:`~symmech.codegen.printers.identifier` (``left wall -> left_wall``), made unique
+among the walls, never ending in ``_batch`` (the C batch functions are ``<name>_batch``);
+the wall prefixes ``psi_``, ``dpsi_``, ``psit_``, ``impact_`` are prefix-free (none
+starts another) and no scene-level name starts with one, so a name determines its
+kind and wall.  (``psi_t_<w>`` would not: the ``psi_t`` of wall ``floor`` and the ``psi``
+of wall ``t_floor`` would both be ``psi_t_floor``.)  :func:`check_unique_names` verifies
+this for every plan and raises :class:`CodegenError` naming the colliding functions.
 
 Functions of time left arbitrary in a scene (``f(t)`` in ``psi = x - f(t)``, Carnot paper
 example 4.4) and their derivatives become run-time *inputs* ``u`` (see
@@ -35,6 +44,7 @@ from typing import TYPE_CHECKING
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech.codegen.printers import identifier
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.impacts.stability import stable_coefficient
@@ -51,6 +61,9 @@ __all__ = [
     "FunctionPlan",
     "ScenePlan",
     "build_plan",
+    "check_unique_names",
+    "wall_function_name",
+    "wall_ids",
 ]
 
 STRATEGIES = ("auto", "closed_form", "linear_solve")
@@ -74,6 +87,12 @@ FUNCTIONS = (
     "impact",
     "projectors",
 )
+
+#: Name prefixes of the per-wall functions, by kind: prefix-free (module docstring).
+WALL_PREFIXES = {"psi": "psi_", "dpsi": "dpsi_", "psi_t": "psit_", "impact": "impact_"}
+
+#: Suffix of the C batch function of each generated function.
+BATCH_SUFFIX = "_batch"
 
 #: Above this number of coordinates the default strategy is ``linear_solve``.
 CLOSED_FORM_MAX_N = 3
@@ -112,6 +131,8 @@ class FunctionPlan:
     named ``"out"`` (``step is None``) or runs ``step`` on the blocks (``step_args`` are
     the integer sizes it needs), writing ``out_shape`` entries.  ``calls`` names another
     function whose result fills the tail of ``out`` (``rhs`` calls ``acceleration``).
+    ``wall`` and ``wall_index`` name the wall of a per-wall function (psi, dpsi, psi_t,
+    impact).
     """
 
     name: str
@@ -125,6 +146,7 @@ class FunctionPlan:
     step_args: tuple[int, ...] = ()
     calls: str | None = None
     wall: str | None = None
+    wall_index: int | None = None
     uses_time: bool = False
     uses_inputs: bool = False
     uses_parameters: bool = False
@@ -149,7 +171,9 @@ class ScenePlan:
     parameters: tuple[sp.Symbol, ...]  # run-time parameters p, in order
     constants: tuple[tuple[sp.Symbol, sp.Expr], ...]  # parameters baked in
     inputs: tuple[tuple[sp.Symbol, sp.Expr], ...]  # (dummy, f(t) or f'(t)) in slot order
-    walls: tuple[str, ...]
+    walls: tuple[str, ...]  # the walls' names, by index
+    wall_ids: tuple[str, ...]  # their sanitised identifiers, by index
+    moving_walls: tuple[bool, ...]  # whether psi depends on t, by index
     strategy: str
     functions: tuple[FunctionPlan, ...]
     omitted: tuple[str, ...] = field(default=())
@@ -165,9 +189,51 @@ class ScenePlan:
 
 
 def _matrix_block(name: str, M: sp.MatrixBase) -> Block:
+    """A matrix block, always two-dimensional (a 1 x 1 metric stays (1, 1))."""
     M = sp.Matrix(M)
-    shape: tuple[int, ...] = (M.rows,) if M.cols == 1 else (M.rows, M.cols)
-    return Block(name, shape, tuple(M))
+    return Block(name, (M.rows, M.cols), tuple(M))
+
+
+def _vector_block(name: str, x: sp.MatrixBase | Sequence[sp.Expr]) -> Block:
+    """A vector block of shape (k,), from a column, a row or a sequence."""
+    entries = tuple(x)
+    return Block(name, (len(entries),), entries)
+
+
+def wall_ids(names: Sequence[str]) -> tuple[str, ...]:
+    """Sanitised, unique identifiers for wall names (module docstring), by index."""
+    taken: set[str] = set()
+    out = []
+    for name in names:
+        wid = identifier(name, "", taken, part=True)
+        if wid == BATCH_SUFFIX[1:] or wid.endswith(BATCH_SUFFIX):
+            taken.discard(wid)
+            wid = identifier(wid + "_w", "", taken, part=True)
+        out.append(wid)
+    return tuple(out)
+
+
+def wall_function_name(kind: str, wall_id: str) -> str:
+    """The generated name of the ``kind`` function (psi, dpsi, psi_t, impact) of a wall."""
+    return WALL_PREFIXES[kind] + wall_id
+
+
+def check_unique_names(functions: Sequence[FunctionPlan]) -> None:
+    """Raise :class:`CodegenError` unless every generated name is unique.
+
+    The names checked are the functions' names and their C batch names
+    (``<name>_batch``): all are symbols of one C file and one Python module."""
+    seen: dict[str, str] = {}
+    clashes: list[str] = []
+    for f in functions:
+        origin = f"{f.kind} of wall {f.wall!r} (index {f.wall_index})" if f.wall else f.kind
+        for name, what in ((f.name, origin), (f.name + BATCH_SUFFIX, f"batch form of {origin}")):
+            if name in seen:
+                clashes.append(f"{name!r} names both the {seen[name]} and the {what}")
+            else:
+                seen[name] = what
+    if clashes:
+        raise CodegenError("generated function names collide: " + "; ".join(clashes))
 
 
 def _scalar_block(name: str, e: sp.Expr) -> Block:
@@ -275,6 +341,9 @@ def build_plan(
     if strategy == "auto":
         strategy = "closed_form" if n <= CLOSED_FORM_MAX_N else "linear_solve"
     baked = _check_constants(scene, constants or {})
+    # a float constant is a double: substitute its exact (dyadic) value, so that x**k
+    # with k = 2.0 is x**2 and the folding of constants rounds once, at printing
+    exact = {s: sp.Rational(val) if isinstance(val, sp.Float) else val for s, val in baked.items()}
     runtime = tuple(p for p in scene.parameters if p not in baked)
     defs: dict = {}
     for key, value in (definitions or {}).items():
@@ -297,7 +366,7 @@ def build_plan(
         (see :mod:`symmech.impacts.stability`).  Velocity-dependent entries keep their
         structure (the sparse forcing, the stable impact maps)."""
         e = inputs.substitute(e)
-        e = e.xreplace(baked) if baked else e
+        e = e.xreplace(exact) if exact else e
         if (
             not e.is_number
             and not (e.free_symbols & velocity_set)
@@ -318,6 +387,7 @@ def build_plan(
         step_args: tuple[int, ...] = (),
         calls: str | None = None,
         wall: str | None = None,
+        wall_index: int | None = None,
     ) -> None:
         blocks = [Block(b.name, b.shape, tuple(prepare(e) for e in b.entries)) for b in blocks]
         syms: set = set().union(*[e.free_symbols for b in blocks for e in b.entries])
@@ -345,6 +415,7 @@ def build_plan(
                 step_args=step_args,
                 calls=calls,
                 wall=wall,
+                wall_index=wall_index,
                 uses_time=uses_t,
                 uses_inputs=uses_u,
                 uses_parameters=uses_p,
@@ -353,7 +424,7 @@ def build_plan(
 
     M = sp.Matrix(scene.mass_matrix())
     f = sp.Matrix(scene.forcing())
-    # a structurally diagonal metric is factored by its square roots, not by Cholesky loops
+    # a structurally diagonal metric is not factored: the solves divide by its diagonal
     diag = int(all(M[i, j] == 0 for i in range(n) for j in range(n) if i != j))
     mu = sp.Matrix(scene.constraint_matrix)
     closed = strategy == "closed_form"
@@ -362,9 +433,9 @@ def build_plan(
         """g, f, the constraint one-forms and mu_dot v: the constrained system's inputs."""
         return [
             _matrix_block("M", M),
-            _matrix_block("f", f),
+            _vector_block("f", f),
             _matrix_block("mu", mu),
-            _matrix_block("rate", scene.constraint_rate()),
+            _vector_block("rate", scene.constraint_rate()),
         ]
 
     if "mass_matrix" in wanted:
@@ -384,10 +455,12 @@ def build_plan(
             "forcing f(q, v, t) of the unconstrained equations g v_dot = f",
             "f_k = -Gamma_kij v^i v^j - dV/dq^k (first kind, no inverse)",
             ("q", "v"),
-            [_matrix_block("out", f)],
+            [_vector_block("out", f)],
             (n,),
         )
     need_acc = bool({"acceleration", "rhs"} & wanted)
+    if "forcing" in wanted or need_acc:
+        omitted.extend(_forcing_notes(f, v, scene.frame is not None))
     if need_acc:
         if closed:
             acc = sp.Matrix(scene.acceleration())
@@ -397,7 +470,7 @@ def build_plan(
                 "acceleration v_dot (closed form)",
                 "g v_dot = f + mu^T lambda, mu v = 0 (Carnot paper eq. 5)",
                 ("q", "v"),
-                [_matrix_block("out", acc)],
+                [_vector_block("out", acc)],
                 (n,),
             )
         elif m:
@@ -419,7 +492,7 @@ def build_plan(
                 "acceleration v_dot, g v_dot = f solved in the code (Cholesky)",
                 "g v_dot = f (Carnot paper eq. 2)",
                 ("q", "v"),
-                [_matrix_block("M", M), _matrix_block("f", f)],
+                [_matrix_block("M", M), _vector_block("f", f)],
                 (n,),
                 step="spd_solve",
                 step_args=(n, diag),
@@ -432,7 +505,7 @@ def build_plan(
             "first-order system y = (q, v): y_dot = (q_dot, v_dot)",
             "q_dot = S(q) v, v_dot = acceleration(q, v)",
             ("y",),
-            [_matrix_block("out", qdot)],
+            [_vector_block("out", qdot)],
             (2 * n,),
             calls="acceleration",
         )
@@ -458,7 +531,7 @@ def build_plan(
                     "Lagrange multipliers lambda (closed form)",
                     "lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)",
                     ("q", "v"),
-                    [_matrix_block("out", scene.multipliers())],
+                    [_vector_block("out", scene.multipliers())],
                     (m,),
                 )
             else:
@@ -480,7 +553,7 @@ def build_plan(
                 "constraint residual mu(q) v (zero on the constraint distribution D)",
                 "r_a = mu^a_i(q) v^i",
                 ("q", "v"),
-                [_matrix_block("out", mu * sp.Matrix(v))],
+                [_vector_block("out", mu * sp.Matrix(v))],
                 (m,),
             )
         if "projectors" in wanted:
@@ -499,72 +572,77 @@ def build_plan(
         omitted.append("multipliers, constraint residual, projectors: the scene has no constraints")
 
     S = scene.frame
-    for w in scene.walls:
-        wname = w.name
+    ids = wall_ids([w.name for w in scene.walls])
+    for w, wid in zip(scene.walls, ids, strict=True):
+        label = f"wall {w.name!r}"
         grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in q]])
         psi_t = sp.diff(w.psi, TIME)
+        where = {"wall": w.name, "wall_index": w.index}
         if "psi" in wanted:
             add(
-                f"psi_{wname}",
+                wall_function_name("psi", wid),
                 "psi",
-                f"gap of wall {wname!r}; the admissible side is psi >= 0",
+                f"gap of {label}; the admissible side is psi >= 0",
                 f"psi = {w.psi}",
                 ("q",),
                 [_scalar_block("out", w.psi)],
                 (),
-                wall=wname,
+                **where,
             )
         if "dpsi" in wanted:
             add(
-                f"dpsi_{wname}",
+                wall_function_name("dpsi", wid),
                 "dpsi",
-                f"gradient d psi/d q of wall {wname!r} (coordinates)",
+                f"gradient d psi/d q of {label} (coordinates)",
                 "dpsi_i = d psi / d q^i",
                 ("q",),
-                [_matrix_block("out", grad.T)],
+                [_vector_block("out", grad)],
                 (n,),
-                wall=wname,
+                **where,
             )
         if "psi_t" in wanted:
             if psi_t != 0:
                 add(
-                    f"psi_t_{wname}",
+                    wall_function_name("psi_t", wid),
                     "psi_t",
-                    f"time derivative d psi/d t of the moving wall {wname!r}",
+                    f"time derivative d psi/d t of the moving {label}",
                     "psi_t = d psi / d t; d/dt psi(t, q(t)) = psi_t + dpsi(q_dot)",
                     ("q",),
                     [_scalar_block("out", psi_t)],
                     (),
-                    wall=wname,
+                    **where,
                 )
             else:
-                omitted.append(f"psi_t_{wname}: the wall does not move (d psi/d t = 0)")
+                omitted.append(
+                    f"{wall_function_name('psi_t', wid)}: {label} does not move (d psi/d t = 0)"
+                )
         if "impact" in wanted:
             imp = scene.impact_map(w.index)
+            name = wall_function_name("impact", wid)
             if closed or w.law == "energy":
                 if not closed:
                     omitted.append(
-                        f"impact_{wname}: the energy law (text 001, 3.2) is not linear;"
+                        f"{name}: the energy law (text 001, 3.2) is not linear;"
                         " its closed form is emitted even with strategy linear_solve"
                     )
                 add(
-                    f"impact_{wname}",
+                    name,
                     "impact",
-                    f"post-impact velocity at wall {wname!r} ({w.law} law, closed form)",
+                    f"post-impact velocity at {label} ({w.law} law, closed form)",
                     _impact_equation(imp),
                     ("q", "v"),
-                    [_matrix_block("out", imp.post_velocity)],
+                    [_vector_block("out", imp.post_velocity)],
                     (n,),
-                    wall=wname,
+                    **where,
                 )
             else:
                 dpsi_v = grad * S if S is not None else grad
                 A = mu.col_join(dpsi_v).col_join(sp.Matrix(w.impulsive_matrix))
                 k = A.rows
                 add(
-                    f"impact_{wname}",
+                    name,
                     "impact",
-                    f"post-impact velocity at wall {wname!r} (Newton law, KKT solved in the code)",
+                    f"post-impact velocity at {label} (Newton law, KKT solved in the code)",
                     "g (v+ - v-) = A^T lambda, A = [mu; dpsi; nu]; mu v+ = 0,"
                     " dpsi v+ + psi_t = -alpha (dpsi v- + psi_t), nu (v+ - V) = 0"
                     " (Carnot paper eqs. 6, 15, 20)",
@@ -577,7 +655,7 @@ def build_plan(
                     (n,),
                     step="impact_kkt",
                     step_args=(n, k, m, diag),
-                    wall=wname,
+                    **where,
                 )
     if not scene.walls:
         omitted.append("psi, dpsi, impact maps: the scene has no walls")
@@ -592,6 +670,7 @@ def build_plan(
             "parameters baked in as constants: "
             + ", ".join(f"{s} = {val}" for s, val in baked.items())
         )
+    check_unique_names(plans)
     return ScenePlan(
         scene_name=scene.name,
         n=n,
@@ -602,10 +681,53 @@ def build_plan(
         constants=tuple(baked.items()),
         inputs=inputs.ordered(),
         walls=tuple(w.name for w in scene.walls),
+        wall_ids=ids,
+        moving_walls=tuple(sp.diff(w.psi, TIME) != 0 for w in scene.walls),
         strategy=strategy,
         functions=tuple(plans),
         omitted=tuple(omitted),
     )
+
+
+def _forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[str]:
+    """What the forcing does not compute: the identically zero coefficients of its
+    velocity-quadratic part (Gamma_kij, or the connection coefficients omega_kij in a
+    frame, symmetrised in i, j: only the symmetric part enters f) and its zero entries."""
+    n = len(v)
+    index = {s: i for i, s in enumerate(v)}
+    total = n * n * (n + 1) // 2
+    present: set[tuple[int, int, int]] = set()
+
+    def monomials(k: int, e: sp.Expr, expanded: bool = False) -> None:
+        for term in sp.Add.make_args(e):
+            idx: list[int] = []
+            plain = True
+            for factor in sp.Mul.make_args(term):
+                base, power = factor.as_base_exp()
+                if base in index and power.is_Integer and power > 0:
+                    idx += [index[base]] * int(power)
+                elif factor.free_symbols & index.keys():
+                    plain = False
+            if not plain and not expanded:
+                monomials(k, sp.expand(term), True)
+            elif len(idx) == 2:
+                present.add((k, min(idx), max(idx)))
+
+    for k, e in enumerate(f):
+        monomials(k, e)
+    nonzero = len(present)
+    what = "connection coefficients omega_k(ij)" if frame else "Christoffel symbols Gamma_k(ij)"
+    notes = [
+        f"forcing: {total - nonzero} of the {total} {what} (symmetrised in i, j) are"
+        " identically zero and are never computed"
+    ]
+    zeros = [k for k, e in enumerate(f) if e == 0]
+    if zeros:
+        notes.append(
+            f"forcing: entries {zeros} are identically zero (no velocity or potential term);"
+            " they are stored as 0.0 without computation"
+        )
+    return notes
 
 
 def _impact_equation(imp) -> str:

@@ -4,10 +4,19 @@ Both printers print symbols through a name table (so any sympy name, ``I_{xx}``,
 ``lambda``, ``double``, ``pow``, becomes a valid local identifier, see :func:`identifier`),
 and share the numerically safer conventions:
 
-* integer powers are products: ``x**2 -> x*x``, ``x**-2 -> 1.0/(x*x)`` (``pow(x, 2)`` is
-  slower and, in some libms, less accurate); half-integer powers use ``sqrt``;
+* integer powers ``x**k`` with ``1 <= |k| <=`` :data:`MAX_PRODUCT_POWER` (8) are products
+  written by repeated squaring (``x**2 -> (x*x)``, ``x**5 -> ((x*x)*(x*x))*x``,
+  ``x**-2 -> (1.0/(x*x))``; at most ``2 log2|k|`` multiplications, a relative error of at
+  most ``(|k| - 1) u`` to first order, plus ``u`` for the reciprocal); beyond, ``pow``.
+  Half-integer powers ``x**(p/2)`` with ``|p| <= 2 MAX_PRODUCT_POWER + 1`` are
+  ``sqrt(x)`` times such a product.  An exponent that is a float with an integral or
+  half-integral value (a baked constant ``k = 2.0``) follows the same rule.  The rule is
+  the same in every function, so ``x**5`` in the energy and ``5 x**4`` in the forcing
+  are both products;
 * rational and integer constants are floating literals (``1/3 -> 0.3333333333333333``),
-  never C integer division; pi and e are literals (``M_PI`` is not C99);
+  never C integer division; pi and e are literals (``M_PI`` is not C99); any other
+  symbol-free subexpression (``sqrt(2)``, ``3*pi/4``, ``sin(1)``) is folded by
+  :func:`fold_numbers` into one correctly rounded literal;
 * :func:`safe_rewrite` applies sympy's ``expm1``/``log1p`` optimisations and rewrites
   ``sqrt(a^2 + b^2)`` (each term a perfect square) to ``hypot(a, b)``, which neither
   overflows nor underflows (the ellipse support function
@@ -19,6 +28,7 @@ from __future__ import annotations
 import keyword
 import re
 from collections.abc import Mapping
+from fractions import Fraction
 
 import sympy as sp
 from sympy.codegen.cfunctions import hypot
@@ -26,7 +36,23 @@ from sympy.codegen.rewriting import ReplaceOptim, optimize, optims_c99
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter
 
-__all__ = ["SymmechCPrinter", "SymmechNumPyPrinter", "identifier", "safe_rewrite"]
+__all__ = [
+    "FOLD_DIGITS",
+    "MAX_PRODUCT_POWER",
+    "SymmechCPrinter",
+    "SymmechNumPyPrinter",
+    "correctly_rounded",
+    "fold_numbers",
+    "identifier",
+    "product_power",
+    "safe_rewrite",
+]
+
+#: Integer powers up to this absolute exponent are printed as products (module docstring).
+MAX_PRODUCT_POWER = 8
+
+#: Digits at which a symbol-free subexpression is evaluated before rounding to float64.
+FOLD_DIGITS = 40
 
 #: Names a generated local may not take: C keywords and <math.h> names, Python keywords
 #: and builtins used by the NumPy module.
@@ -41,24 +67,116 @@ _RESERVED = {
 }
 
 
-def identifier(name: str, prefix: str, taken: set[str]) -> str:
+def identifier(name: str, prefix: str, taken: set[str], *, part: bool = False) -> str:
     """A valid C and Python identifier for the sympy name ``name``, unique in ``taken``.
 
-    Non-identifier characters become ``_`` (``I_{xx} -> I_xx``), the ``prefix`` (``q``,
-    ``p``, ...) keeps it apart from temporaries and reserved words, and a numeric suffix
-    keeps it unique.  The result is added to ``taken``.
+    Non-identifier characters become ``_`` (``I_{xx} -> I_xx``, ``left wall ->
+    left_wall``), runs of ``_`` are collapsed and leading or trailing ones stripped (so the
+    result never contains ``__``), the ``prefix`` (``q``, ``p``, ...) keeps it apart from
+    temporaries and reserved words, and a numeric suffix keeps it unique.  With
+    ``part=True`` the result is only a part of a longer identifier (a wall name after
+    ``psi_``): reserved words and a leading digit are then allowed.  The result is added
+    to ``taken``.
     """
     base = re.sub(r"[^0-9A-Za-z_]+", "_", name).strip("_") or "s"
     base = re.sub(r"_+", "_", base)
     candidate = f"{prefix}_{base}" if prefix else base
-    if candidate in _RESERVED or candidate[0].isdigit():
+    reserved = set() if part else _RESERVED
+    if not part and (candidate in _RESERVED or candidate[0].isdigit()):
         candidate = f"s_{candidate}"
     out, k = candidate, 1
-    while out in taken or out in _RESERVED:
+    while out in taken or out in reserved:
         out = f"{candidate}_{k}"
         k += 1
     taken.add(out)
     return out
+
+
+def correctly_rounded(value: sp.Expr) -> float:
+    """The float64 nearest to the real number ``value`` (a symbol-free sympy expression).
+
+    Rationals are rounded exactly (``float(Fraction)``); anything else is evaluated to
+    :data:`FOLD_DIGITS` significant digits first, so the result is correctly rounded
+    unless ``value`` lies within ``10^-40`` (relative) of a midpoint between two doubles.
+    Raises ``ValueError`` if ``value`` is not a finite real number.
+    """
+    v = sp.sympify(value)
+    if v.is_Rational:
+        x = float(Fraction(int(v.p), int(v.q)))
+    else:
+        f = v.evalf(FOLD_DIGITS)
+        if not isinstance(f, sp.Float):
+            raise ValueError(f"constant {value} is not a finite real number")
+        if not f.is_finite:
+            raise ValueError(f"constant {value} is not a finite real number")
+        sign, man, exp, _ = f._mpf_
+        exact = Fraction(int(man)) * (Fraction(2) ** int(exp))
+        x = float(-exact if sign else exact)
+    if x != x or x in (float("inf"), float("-inf")):
+        raise ValueError(f"constant {value} is not a finite float64")
+    return x
+
+
+def _literal(value: sp.Expr) -> sp.Expr:
+    """A symbol-free value as an sympy number that prints as its correctly rounded double:
+    an Integer when the double is an integer of at most 53 bits, else a 53-bit Float."""
+    x = correctly_rounded(value)
+    if x == int(x) and abs(x) < 2**53:
+        return sp.Integer(int(x))
+    return sp.Float(x, precision=53)
+
+
+def _normal_exponent(k: sp.Expr) -> sp.Expr:
+    """A float exponent with an integral or half-integral value as the exact Rational."""
+    if isinstance(k, sp.Float):
+        twice = 2 * float(k)
+        if twice == int(twice) and abs(twice) <= 2**53:
+            return sp.Rational(int(twice), 2)
+    return k
+
+
+def fold_numbers(expr: sp.Expr) -> sp.Expr:
+    """Fold every symbol-free subexpression into one correctly rounded literal.
+
+    ``sqrt(2)*x -> 1.4142135623730951*x``, ``3*sqrt(2)*x + 1 + pi -> 4.242...*x +
+    4.141...`` (the numeric factors of a product and the numeric terms of a sum are
+    combined first); integers and rationals stay exact (they print as literals);
+    exponents are left symbolic (``x**(1/2)`` still prints ``sqrt``), except that a float
+    exponent with an integral or half-integral value becomes that rational (``x**2.0 ->
+    x**2``, ``x**1.0 -> x``).  The value is the real number rounded once
+    (:func:`correctly_rounded`), so its error, at most ``u/2`` relative, is no larger than
+    the first-order rounding error of evaluating the subexpression in float64.
+    """
+
+    def numeric(e: sp.Expr) -> bool:
+        return bool(e.is_number) and not e.is_Rational and not isinstance(e, sp.Float)
+
+    def go(e: sp.Expr) -> sp.Expr:
+        if e.is_Atom:
+            return e
+        if e.is_number:
+            return _literal(e) if numeric(e) else e
+        if e.is_Pow:
+            return sp.Pow(go(e.base), _normal_exponent(e.exp))
+        if e.is_Add or e.is_Mul:
+            # the exact numeric arguments are combined, then rounded once
+            op = sp.Add if e.is_Add else sp.Mul
+            combined = op(*[a for a in e.args if a.is_number])
+            rest = [go(a) for a in e.args if not a.is_number]
+            return op(_literal(combined) if numeric(combined) else combined, *rest)
+        return e.func(*[go(a) for a in e.args])
+
+    return go(sp.sympify(expr))
+
+
+def product_power(k: sp.Expr) -> bool:
+    """Whether ``x**k`` prints as a product (times ``sqrt(x)`` for a half-integer k)."""
+    k = _normal_exponent(k)
+    if k.is_Integer:
+        return 1 <= abs(int(k)) <= MAX_PRODUCT_POWER
+    if k.is_Rational and k.q == 2:
+        return abs(int(k.p)) // 2 <= MAX_PRODUCT_POWER
+    return False
 
 
 def _perfect_square_root(term: sp.Expr) -> sp.Expr | None:
@@ -114,10 +232,7 @@ def safe_rewrite(expr: sp.Expr) -> sp.Expr:
 
 
 def _float_literal(value: sp.Expr) -> str:
-    x = float(value)
-    if x != x or x in (float("inf"), float("-inf")):
-        raise ValueError(f"constant {value} is not a finite float64")
-    s = repr(x)
+    s = repr(correctly_rounded(value))
     return s if any(c in s for c in ".en") else s + ".0"
 
 
@@ -162,27 +277,29 @@ class _Float64Mixin:
     def _print_Zero(self, expr: sp.Expr) -> str:
         return "0.0"
 
-    def _product(self, base: sp.Expr, k: int) -> str:
-        """``(b*b*...)``, parenthesised: the Mul printer writes ``1.0/`` before a power in
-        a denominator without parentheses, and ``1.0/y*y`` would mean ``(1/y)*y``."""
-        b = self.parenthesize(base, 50)  # type: ignore[attr-defined]
-        return b if k == 1 else "(" + "*".join([b] * k) + ")"
+    def _power(self, b: str, k: int) -> str:
+        """``b**k`` for ``k >= 1`` by repeated squaring, parenthesised (the Mul printer
+        writes ``1.0/`` before a power in a denominator without parentheses, and
+        ``1.0/y*y`` would mean ``(1/y)*y``)."""
+        if k == 1:
+            return b
+        half = self._power(b, k // 2)
+        square = f"({half}*{half})"
+        return f"({square}*{b})" if k % 2 else square
 
     def _print_Pow(self, expr: sp.Pow) -> str:
-        b, e = expr.base, expr.exp
-        if e.is_Integer and 1 <= abs(int(e)) <= 4:
-            body = self._product(b, abs(int(e)))
+        b, e = expr.base, _normal_exponent(expr.exp)
+        if e.is_Integer and product_power(e):
+            body = self._power(self.parenthesize(b, 50), abs(int(e)))  # type: ignore[attr-defined]
             return body if e > 0 else f"(1.0/{body})"
-        if e == sp.S.Half:
-            return f"{self._sqrt}({self._print(b)})"  # type: ignore[attr-defined]
-        if e == -sp.S.Half:
-            return f"(1.0/{self._sqrt}({self._print(b)}))"  # type: ignore[attr-defined]
-        if e.is_Rational and e.q == 2 and abs(e.p) <= 7:
+        if e.is_Rational and e.q == 2 and product_power(e):
             k = abs(int(e.p)) // 2
             root = f"{self._sqrt}({self._print(b)})"  # type: ignore[attr-defined]
-            factors = [root] + [self.parenthesize(b, 50)] * k  # type: ignore[attr-defined]
-            body = "(" + "*".join(factors) + ")"
-            return body if e > 0 else f"(1.0/{body})"
+            if k:
+                root = f"({root}*{self._power(self.parenthesize(b, 50), k)})"  # type: ignore[attr-defined]
+            return root if e > 0 else f"(1.0/{root})"
+        if e is not expr.exp:
+            expr = sp.Pow(b, e, evaluate=False)
         return super()._print_Pow(expr)  # type: ignore[misc]
 
 
