@@ -6,6 +6,7 @@ command line uses to those functions and a one-line description.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable
 
 import sympy as sp
@@ -13,6 +14,7 @@ import sympy as sp
 from symmech.declaration import shapes
 from symmech.declaration.symbols import coordinates, t, velocities
 from symmech.declaration.wall import Wall
+from symmech.errors import SceneError
 from symmech.scene import Scene
 
 __all__ = [
@@ -167,8 +169,11 @@ def pendulum_on_cart(n: int) -> Scene:
     """The n-link planar pendulum on a cart (the PyDy benchmark), declared by its kinetic and
     potential energy: cart mass m0 at x, links of length l_i with point masses m_{i+1},
     angles q_i from the downward vertical, gravity g."""
-    if n < 1:
-        raise ValueError("pendulum_on_cart: n must be at least 1")
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+        raise SceneError(
+            f"pendulum_on_cart: n (the number of links) must be an integer >= 1, got {n!r}"
+        )
+    n = int(n)
     q = coordinates(["x"] + [f"q{i}" for i in range(n)])
     qd = velocities(q)
     m = sp.symbols(f"m0:{n + 1}", positive=True)
@@ -202,9 +207,7 @@ def example(name: str) -> Scene:
     """The built-in scene called ``name`` (see :data:`EXAMPLES`)."""
     try:
         build = EXAMPLES[name][0]
-    except KeyError:
-        from symmech.errors import SceneError
-
+    except (KeyError, TypeError):  # TypeError: an unhashable name
         raise SceneError(
             f"no built-in scene named {name!r}; choose one of {sorted(EXAMPLES)}"
         ) from None

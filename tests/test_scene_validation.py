@@ -32,12 +32,33 @@ def refused(**kwargs) -> sm.SceneError:
         (dict(metric=sp.Matrix([[1, 1, 0], [1, 1, 0], [0, 0, 1]])), ["metric", "singular"]),
         (dict(metric=sp.diag(m, -m, I)), ["metric", "not positive definite"]),
         (dict(metric=sp.diag(1, 1, sp.sin(th) ** 2 - 2)), ["metric", "not positive definite"]),
+        (dict(metric=sp.Matrix([[1, 2, 0], [2, 1, 0], [0, 0, 1]])), ["not positive definite"]),
+        # det = m^2 (1 - 4 cos^2 theta): indefinite wherever |cos theta| > 1/2
         (
             dict(
-                metric=sp.Matrix([[m, m * sp.cos(th), 0], [m * sp.cos(th), m, 0], [0, 0, I]]) * 0
-                + sp.Matrix([[1, 2, 0], [2, 1, 0], [0, 0, 1]])
+                metric=sp.Matrix(
+                    [[m, 2 * m * sp.cos(th), 0], [2 * m * sp.cos(th), m, 0], [0, 0, I]]
+                )
             ),
-            ["metric", "not positive definite"],
+            ["metric", "not positive definite at the sampled point", "theta="],
+        ),
+        # det = m^2 (1 - cos^2 theta) - m^2 sin^2 theta = 0 identically: singular everywhere
+        (
+            dict(
+                metric=sp.Matrix(
+                    [
+                        [m, m * sp.cos(th), 0],
+                        [m * sp.cos(th), m * (1 - sp.sin(th) ** 2), 0],
+                        [0, 0, I],
+                    ]
+                )
+            ),
+            ["metric", "singular (determinant identically 0)"],
+        ),
+        # det = x^2 y^2 (1 - 1) = 0 for all x, y, though every entry depends on q
+        (
+            dict(metric=sp.Matrix([[x**2, x * y, 0], [x * y, y**2, 0], [0, 0, 1]])),
+            ["metric", "singular"],
         ),
         (dict(kinetic_energy=m * xd**3), ["kinetic_energy", "not a quadratic form"]),
         (dict(kinetic_energy=m * xd**2 / 2 + m * xd), ["kinetic_energy", "not a quadratic form"]),
@@ -175,3 +196,28 @@ def test_default_parameters_are_sorted_and_deterministic():
     g = sp.Symbol("g", positive=True)
     scene = sm.Scene(Q, metric=sp.diag(m, m, I), potential=m * g * y, constraints=[yd + R * thd])
     assert scene.parameters == (I, R, g, m)
+    # a name tie (two symbols named g) has no deterministic order: it is refused, with
+    # the same message whatever order the symbols are met in
+    g2 = sp.Symbol("g")
+    messages = set()
+    for V in (m * g * y + g2 * x, g2 * x + m * g * y, m * g * (y + g2 * x)):
+        with pytest.raises(sm.SceneError) as info:
+            sm.Scene(Q, metric=sp.diag(m, m, I), potential=V)
+        messages.add(str(info.value))
+    (message,) = messages
+    assert "symbol g (positive=True)" in message and "symbol g (no assumptions)" in message
+
+
+def test_metrics_positive_definite_off_a_small_set_are_accepted():
+    # singular only at x = 0 (like polar coordinates at the origin)
+    sm.Scene(Q, metric=sp.diag(1, x**2, 1))
+    # det = (2 + sin theta) 2 - cos^2 theta >= 1: positive definite everywhere
+    c = sp.cos(th)
+    sm.Scene(Q, metric=sp.Matrix([[2 + sp.sin(th), c, 0], [c, 2, 0], [0, 0, I]]))
+
+
+def test_example_arguments_are_symmech_errors():
+    from symmech.examples import pendulum_on_cart
+
+    with pytest.raises(sm.SceneError, match="pendulum_on_cart: n"):
+        pendulum_on_cart(0)

@@ -1,21 +1,77 @@
-"""Fast float64 evaluation of sympy expressions at sample points (for validation checks).
+"""Numerical evaluation of sympy expressions at sample points (for validation checks).
 
 Validation evaluates metrics, frames and constraint rows at a few random points.  Rebuilding
 a large sympy tree with ``subs``/``evalf`` costs far more than the check itself, so this
-module walks the tree once with Python's ``math``/``cmath`` functions, memoising shared
-subtrees.  Anything it does not know is handed to ``evalf``.
+module walks the tree once, memoising shared subtrees:
+
+* :func:`evaluate` / :func:`evaluate_matrix` in float64 (Python's ``cmath``);
+* :func:`evaluate_matrix_mp` in mpmath (arbitrary exponent range), the fallback when a
+  value overflows float64 (``exp(1000)``);
+* :func:`vanishes` decides "identically zero" by exact-input, 50-digit evaluation at the
+  sample points, comparing the value with the size of the terms that cancel in it (cheap
+  and bounded, unlike ``sympy.simplify``);
+* :func:`classify_symmetric` tells positive definite / singular / indefinite, after
+  scaling the matrix to unit diagonal so that neither huge nor tiny entries overflow;
+  :func:`rank_at` gives a numerical rank the same way;
+* :func:`proven_sign` proves an expression positive from its structure alone (sums and
+  products of positive terms, ``exp`` of a real argument), without evaluating anything:
+  sympy's ``is_positive`` may evaluate numerically, and on ``exp(exp(exp(1000)))`` it
+  raises an OverflowError.
+
+Every failure (overflow, division by zero, a value that is not finite, an atom without a
+value) raises :class:`EvaluationError`; no floating-point warning escapes.  Point values
+may be given for any atom, not only symbols: an undefined function ``g(x)`` or a
+derivative ``Derivative(g(x), x)`` is then evaluated as that value.
 """
 
 from __future__ import annotations
 
 import cmath
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
+import mpmath
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
-__all__ = ["evaluate", "evaluate_matrix"]
+__all__ = [
+    "EvaluationError",
+    "classify_symmetric",
+    "evaluate",
+    "evaluate_matrix",
+    "evaluate_matrix_mp",
+    "proven_sign",
+    "rank_at",
+    "real_values",
+    "vanishes",
+]
+
+#: Working precision (decimal digits) of the mpmath evaluations.
+MP_DIGITS = 50
+# |value| <= _ZERO_RELATIVE * (size of the cancelling terms) counts as zero at MP_DIGITS.
+_ZERO_RELATIVE = mpmath.mpf(10) ** -30
+# |value| below this (absolute) counts as zero whatever the terms (underflow guard).
+_ZERO_ABSOLUTE = mpmath.mpf(10) ** -300
+# Eigenvalues of a metric scaled to unit diagonal within this of 0 count as 0.
+_TOLERANCE = 1e-10
+
+
+class EvaluationError(ArithmeticError):
+    """An expression has no finite numeric value at a point.
+
+    ``reason`` says why ("overflows float64", "is not finite", "cannot be evaluated: ...");
+    ``index`` is the matrix entry (i, j) when raised by a matrix evaluation.
+    """
+
+    def __init__(self, reason: str, index: tuple[int, int] | None = None):
+        self.reason = reason
+        self.index = index
+        where = f"entry [{index[0]},{index[1]}] " if index is not None else ""
+        super().__init__(f"{where}{reason}")
+
+
+# -- float64 -------------------------------------------------------------------------------
 
 _FUNCS = {
     sp.sin: cmath.sin,
@@ -34,14 +90,21 @@ _FUNCS = {
     sp.csc: lambda x: 1 / cmath.sin(x),
 }
 
+_ARITHMETIC = (OverflowError, ZeroDivisionError, ValueError, RecursionError)
+_NOT_FINITE = (sp.oo, -sp.oo, sp.zoo, sp.nan)
+_INFINITE = "is infinite or undefined (oo, zoo or nan)"
 
-def _eval(expr: sp.Basic, env: dict, memo: dict) -> complex:
+
+def _eval(expr: sp.Basic, env: Mapping, memo: dict) -> complex:
     hit = memo.get(expr)
     if hit is not None:
         return hit
-    if expr.is_Symbol:
-        val = complex(env[expr])
-    elif expr.is_Number or expr.is_NumberSymbol:
+    value = env.get(expr)
+    if value is not None:
+        val = complex(value)
+    elif expr.is_Number or expr.is_NumberSymbol or expr is sp.zoo:
+        if expr in _NOT_FINITE:
+            raise EvaluationError(_INFINITE)
         val = complex(expr)
     elif expr.is_Add:
         val = sum((_eval(a, env, memo) for a in expr.args), 0j)
@@ -52,29 +115,381 @@ def _eval(expr: sp.Basic, env: dict, memo: dict) -> complex:
     elif expr.is_Pow:
         base = _eval(expr.base, env, memo)
         e = expr.exp
-        if e.is_Integer:
-            val = base ** int(e)
-        else:
-            val = base ** _eval(e, env, memo)
+        val = base ** int(e) if e.is_Integer else base ** _eval(e, env, memo)
     elif type(expr) in _FUNCS:
         val = _FUNCS[type(expr)](_eval(expr.args[0], env, memo))
     elif isinstance(expr, sp.atan2):
         y, x = (_eval(a, env, memo) for a in expr.args)
         val = complex(math.atan2(y.real, x.real))
     else:
-        val = complex(sp.N(expr.xreplace({k: sp.Float(v, 20) for k, v in env.items()}), 17))
+        val = complex(_evalf(expr, env, 17))
+    if not cmath.isfinite(val):
+        raise EvaluationError("is not finite in float64 (an overflow or a division by zero)")
     memo[expr] = val
     return val
 
 
+def _evalf(expr: sp.Basic, env: Mapping, digits: int) -> sp.Expr:
+    """Last resort for functions the walkers do not know: sympy's evalf at the point, a
+    finite sympy number (else EvaluationError)."""
+    missing = [a for a in expr.free_symbols if a not in env]
+    if missing:
+        raise EvaluationError(f"cannot be evaluated: no value for {sorted(map(str, missing))}")
+    try:
+        # subs, not xreplace: it leaves bound variables (of an Integral, say) alone
+        value = sp.N(expr.subs({k: sp.Float(v, digits + 3) for k, v in env.items()}), digits)
+        re, im = value.as_real_imag()
+        if not (re.is_Float or re.is_zero) or not (im.is_Float or im.is_zero):
+            raise TypeError(f"the value {_short(value)} is not a finite number")
+        return value
+    except (TypeError, AttributeError, *_ARITHMETIC) as exc:
+        raise EvaluationError(f"cannot be evaluated ({_short(expr)}: {exc})") from None
+
+
+def _short(expr: object, limit: int = 40) -> str:
+    s = str(expr)
+    return s if len(s) <= limit else s[: limit - 3] + "..."
+
+
+def _reason(exc: BaseException) -> str:
+    if isinstance(exc, OverflowError):
+        return "overflows float64"
+    if isinstance(exc, ZeroDivisionError):
+        return "divides by zero"
+    if isinstance(exc, RecursionError):
+        return "is nested too deeply to evaluate"
+    return f"is undefined ({exc})"
+
+
 def evaluate(expr: sp.Basic, point: Mapping) -> complex:
-    """``expr`` at ``point`` (symbol -> number) as a complex float."""
-    return _eval(sp.sympify(expr), dict(point), {})
+    """``expr`` at ``point`` (atom -> number) as a complex float; raises EvaluationError."""
+    try:
+        return _eval(sp.sympify(expr), dict(point), {})
+    except _ARITHMETIC as exc:
+        raise EvaluationError(_reason(exc)) from None
 
 
 def evaluate_matrix(M: sp.MatrixBase, point: Mapping) -> np.ndarray:
-    """Every entry of ``M`` at ``point``, as a complex numpy array (shared subtrees once)."""
+    """Every entry of ``M`` at ``point``, as a complex numpy array (shared subtrees once).
+
+    Raises :class:`EvaluationError` with the entry's index when an entry has no finite
+    float64 value.
+    """
     env, memo = dict(point), {}
-    return np.array(
-        [[_eval(M[i, j], env, memo) for j in range(M.cols)] for i in range(M.rows)], dtype=complex
-    )
+    out = np.empty((M.rows, M.cols), dtype=complex)
+    for i in range(M.rows):
+        for j in range(M.cols):
+            try:
+                out[i, j] = _eval(M[i, j], env, memo)
+            except EvaluationError as exc:
+                raise EvaluationError(exc.reason, (i, j)) from None
+            except _ARITHMETIC as exc:
+                raise EvaluationError(_reason(exc), (i, j)) from None
+    return out
+
+
+# -- mpmath --------------------------------------------------------------------------------
+
+_MP_FUNCS = {
+    sp.sin: mpmath.sin,
+    sp.cos: mpmath.cos,
+    sp.tan: mpmath.tan,
+    sp.exp: mpmath.exp,
+    sp.log: mpmath.log,
+    sp.asin: mpmath.asin,
+    sp.acos: mpmath.acos,
+    sp.atan: mpmath.atan,
+    sp.sinh: mpmath.sinh,
+    sp.cosh: mpmath.cosh,
+    sp.tanh: mpmath.tanh,
+    sp.cot: mpmath.cot,
+    sp.sec: mpmath.sec,
+    sp.csc: mpmath.csc,
+}
+
+
+def _mp_number(x: sp.Basic) -> mpmath.mpc:
+    if x in _NOT_FINITE:
+        raise EvaluationError(_INFINITE)
+    if x.is_Integer:
+        return mpmath.mpc(int(x))
+    if x.is_Rational:
+        return mpmath.mpc(mpmath.mpf(int(x.p)) / int(x.q))
+    if x.is_Float:
+        return mpmath.mpc(mpmath.mpf(x._mpf_))
+    try:
+        re, im = (sp.Float(part, mpmath.mp.dps) for part in sp.N(x, mpmath.mp.dps).as_real_imag())
+        return mpmath.mpc(mpmath.mpf(re._mpf_), mpmath.mpf(im._mpf_))
+    except (TypeError, AttributeError, ValueError) as exc:
+        raise EvaluationError(f"cannot be evaluated ({_short(x)}: {exc})") from None
+
+
+def _mp_eval(expr: sp.Basic, env: Mapping, memo: dict) -> tuple[mpmath.mpc, mpmath.mpf]:
+    """(value, size): size bounds the magnitude of the terms combined into the value, so a
+    value far below its size is a cancellation to zero (rounding error ~ size * 10^-dps)."""
+    hit = memo.get(expr)
+    if hit is not None:
+        return hit
+    value = env.get(expr)
+    if value is not None:
+        val = _mp_number(sp.sympify(value))
+        size = abs(val)
+    elif expr.is_Number or expr.is_NumberSymbol or expr is sp.I or expr is sp.zoo:
+        val = _mp_number(expr)
+        size = abs(val)
+    elif expr.is_Add:
+        val, size = mpmath.mpc(0), mpmath.mpf(0)
+        for a in expr.args:
+            v, s = _mp_eval(a, env, memo)
+            val, size = val + v, size + s
+    elif expr.is_Mul:
+        val, size = mpmath.mpc(1), mpmath.mpf(1)
+        for a in expr.args:
+            v, s = _mp_eval(a, env, memo)
+            val, size = val * v, size * s
+    elif expr.is_Pow:
+        base, bsize = _mp_eval(expr.base, env, memo)
+        e = expr.exp
+        if e.is_Integer and int(e) >= 0:
+            val, size = base ** int(e), bsize ** int(e)
+        else:
+            if base == 0:
+                raise EvaluationError("divides by zero")
+            if e.is_Integer:
+                ev, esize, val = int(e), 0, base ** int(e)
+            else:
+                ev, esize = _mp_eval(e, env, memo)
+                val = base**ev
+            # relative error of the base (bsize/|base|) is amplified |e| times
+            size = abs(val) * (1 + abs(ev) * bsize / abs(base) + esize * abs(mpmath.log(base)))
+    elif type(expr) in _MP_FUNCS:
+        arg, asize = _mp_eval(expr.args[0], env, memo)
+        val = _MP_FUNCS[type(expr)](arg)
+        # an error e in the argument moves the value by about |f'| e; |f'| <= |f| + 1 for
+        # the functions where it matters (sin, cos, exp, sinh, cosh)
+        size = abs(val) + (abs(val) + 1) * asize
+    elif isinstance(expr, sp.atan2):
+        (y, ys), (x, xs) = (_mp_eval(a, env, memo) for a in expr.args)
+        val = mpmath.mpc(mpmath.atan2(y.real, x.real))
+        size = abs(val) + (ys + xs) / max(abs(y) + abs(x), _ZERO_ABSOLUTE)
+    else:
+        val = _mp_number(_evalf(expr, env, mpmath.mp.dps))
+        size = abs(val)
+    if not (mpmath.isfinite(val.real) and mpmath.isfinite(val.imag)):
+        raise EvaluationError("is not finite")
+    memo[expr] = (val, size)
+    return val, size
+
+
+def evaluate_matrix_mp(
+    M: sp.MatrixBase, point: Mapping, digits: int = MP_DIGITS
+) -> list[list[mpmath.mpc]]:
+    """Every entry of ``M`` at ``point`` in mpmath (``digits`` decimal digits).
+
+    mpmath numbers have an unbounded exponent, so ``exp(1000)`` is fine; raises
+    :class:`EvaluationError` with the entry's index when an entry cannot be evaluated
+    (``exp(exp(exp(1000)))`` has more digits in its exponent than memory holds).
+    """
+    env, memo = dict(point), {}
+    rows = []
+    with mpmath.workdps(digits):
+        for i in range(M.rows):
+            row = []
+            for j in range(M.cols):
+                try:
+                    row.append(_mp_eval(M[i, j], env, memo)[0])
+                except EvaluationError as exc:
+                    raise EvaluationError(exc.reason, (i, j)) from None
+                except (*_ARITHMETIC, MemoryError) as exc:
+                    raise EvaluationError(
+                        f"cannot be evaluated in {digits}-digit arithmetic ({exc})", (i, j)
+                    ) from None
+            rows.append(row)
+    return rows
+
+
+def vanishes(expr: sp.Basic, points: Sequence[Mapping], digits: int = MP_DIGITS) -> bool | None:
+    """Whether ``expr`` is identically zero, judged at ``points`` (exact rational inputs).
+
+    True when it is zero (relative to the terms that cancel in it) at every point where it
+    can be evaluated, False as soon as it is not, None when it cannot be evaluated at any
+    point.  A generic statement: an expression that vanishes at all the random points is
+    taken to vanish identically.  Its cost is a walk of the tree per point, whatever the
+    expression (``sympy.simplify`` can take minutes on a few hundred operations).
+    """
+    expr = sp.sympify(expr)
+    if expr == 0:
+        return True
+    if expr.is_Number:
+        return False
+    judged = False
+    with mpmath.workdps(digits):
+        for point in points:
+            try:
+                val, size = _mp_eval(expr, dict(point), {})
+            except (EvaluationError, *_ARITHMETIC, MemoryError):
+                continue
+            judged = True
+            if abs(val) > max(_ZERO_RELATIVE * size, _ZERO_ABSOLUTE):
+                return False
+    return True if judged else None
+
+
+# -- definiteness --------------------------------------------------------------------------
+
+
+def classify_symmetric(A: Sequence[Sequence[object]]) -> tuple[str, str]:
+    """Classify a real symmetric matrix: ``("positive definite" | "singular" | "indefinite",
+    evidence)``.
+
+    Entries may be floats or mpmath numbers of any size.  A positive definite matrix has a
+    positive diagonal; scaling it to unit diagonal, ``B = D^-1/2 A D^-1/2``, keeps its
+    signature and bounds every entry by 1, so the eigenvalues of B are computed in float64
+    without overflow and compared with a tolerance independent of the units (a metric
+    ``diag(1e308, 1e-308)`` is positive definite).  "singular" means an eigenvalue of B
+    within 1e-10 of 0.  ``evidence`` is a short text for messages.
+    """
+    n = len(A)
+    if all(isinstance(x, float) for row in A for x in row):
+        F = np.array(A, dtype=float)
+        d = np.diag(F)
+        if (d > 0).all():
+            s = np.sqrt(d)
+            with np.errstate(all="ignore"):
+                B = F / s[:, None] / s[None, :]
+            if np.isfinite(B).all():
+                return _classify_unit_diagonal(B)
+    d = [A[i][i] for i in range(n)]
+    neg = [i for i in range(n) if d[i] < 0]
+    if neg:
+        i = neg[0]
+        return "indefinite", f"diagonal entry [{i},{i}] = {mpmath.nstr(d[i], 6)} < 0"
+    for i in range(n):
+        if d[i] == 0:
+            j = next((j for j in range(n) if A[i][j] != 0), None)
+            if j is not None:
+                return "indefinite", f"diagonal entry [{i},{i}] = 0 but [{i},{j}] != 0"
+            return "singular", f"row {i} is zero"
+    s = [mpmath.sqrt(mpmath.mpf(x)) for x in d]
+    B = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            b = (mpmath.mpf(A[i][j]) / s[i]) / s[j]
+            if i != j and abs(b) > 1 + _TOLERANCE:
+                # the 2 x 2 principal minor 1 - b^2 is negative
+                return "indefinite", f"g[{i},{j}]^2 > g[{i},{i}] g[{j},{j}]"
+            B[i, j] = float(b)
+    return _classify_unit_diagonal(B)
+
+
+def _classify_unit_diagonal(B: np.ndarray) -> tuple[str, str]:
+    n = B.shape[0]
+    off = np.abs(B - np.diag(np.diag(B)))
+    if n > 1 and off.max() > 1 + _TOLERANCE:
+        i, j = np.unravel_index(np.argmax(off), off.shape)
+        return "indefinite", f"g[{i},{j}]^2 > g[{i},{i}] g[{j},{j}]"
+    w = np.linalg.eigvalsh(B)
+    shown = np.round(w, 6).tolist()
+    if w[0] < -_TOLERANCE:
+        return "indefinite", f"eigenvalues of the metric scaled to unit diagonal {shown}"
+    if w[0] <= _TOLERANCE:
+        return "singular", f"eigenvalues of the metric scaled to unit diagonal {shown}"
+    return "positive definite", f"eigenvalues of the metric scaled to unit diagonal {shown}"
+
+
+def real_values(M: sp.MatrixBase, point: Mapping) -> tuple[list[list], bool]:
+    """Entries of M at point as real numbers (float64, or 30-digit mpmath when float64
+    overflows) and whether M has a non-negligible imaginary part there.
+
+    Raises :class:`EvaluationError` (with the entry's index) when an entry has no finite
+    value in either arithmetic.
+    """
+    try:
+        A = evaluate_matrix(M, point)
+        with np.errstate(all="ignore"):
+            scale = float(np.abs(A).max(initial=0.0))
+            imag = float(np.abs(A.imag).max(initial=0.0))
+        if np.isfinite(scale):
+            return A.real.tolist(), imag > 1e-12 * scale
+        float_reason = "overflows float64"
+    except EvaluationError as exc:
+        if exc.reason == _INFINITE:
+            raise
+        float_reason = exc.reason
+    try:
+        rows = evaluate_matrix_mp(M, point, digits=30)
+    except EvaluationError as exc:
+        raise EvaluationError(f"{float_reason}, and {exc.reason}", exc.index) from None
+    scale = max((abs(x) for r in rows for x in r), default=mpmath.mpf(0))
+    imag = max((abs(x.imag) for r in rows for x in r), default=mpmath.mpf(0))
+    return [[x.real for x in r] for r in rows], imag > mpmath.mpf(10) ** -12 * scale
+
+
+def rank_at(M: sp.MatrixBase, point: Mapping) -> int:
+    """Numerical rank of M at point, each row scaled to unit size first (rank is invariant
+    under that, and the tolerance 1e-10 is then independent of units); raises
+    :class:`EvaluationError`."""
+    rows, _ = real_values(M, point)
+    A = np.zeros((M.rows, M.cols))
+    for i, r in enumerate(rows):
+        big = max((abs(x) for x in r), default=0)
+        if big:
+            A[i] = [float(mpmath.mpf(x) / big) for x in r]
+    return int(np.linalg.matrix_rank(A, tol=1e-10))
+
+
+# -- signs proven from the structure -------------------------------------------------------
+
+
+def proven_sign(e: sp.Expr) -> str | None:
+    """``"pos"`` or ``"nonneg"`` when the structure of ``e`` proves it, else None.
+
+    Proven positive: positive numbers, pi, E, symbols and undefined functions declared
+    positive, sums and products of positive (and nonnegative) terms, positive bases to a
+    real power, ``exp`` and ``cosh`` of a real argument; nonnegative: even powers of real
+    terms.  Nothing is evaluated, so the cost is one walk of the tree.
+    """
+    if e.is_Number:
+        if e in (sp.nan, sp.oo, sp.zoo, -sp.oo) or not e.is_real:
+            return None
+        return "pos" if e > 0 else ("nonneg" if e == 0 else None)
+    if e.is_NumberSymbol:
+        return "pos" if e in (sp.pi, sp.E) else None
+    if isinstance(e, sp.Symbol | AppliedUndef):
+        if e.is_positive:
+            return "pos"
+        return "nonneg" if e.is_nonnegative else None
+    if e.is_Add or e.is_Mul:
+        signs = [proven_sign(a) for a in e.args]
+        if None in signs:
+            return None
+        if e.is_Add:
+            return "pos" if "pos" in signs else "nonneg"
+        return "pos" if all(s == "pos" for s in signs) else "nonneg"
+    if e.is_Pow:
+        base = proven_sign(e.base)
+        if base == "pos" and _proven_real(e.exp):
+            return "pos"
+        if e.exp.is_Integer and int(e.exp) % 2 == 0 and _proven_real(e.base):
+            return "nonneg" if int(e.exp) > 0 else None
+        return "nonneg" if base == "nonneg" and e.exp.is_Rational and e.exp > 0 else None
+    if isinstance(e, sp.exp | sp.cosh) and _proven_real(e.args[0]):
+        return "pos"
+    return None
+
+
+def _proven_real(e: sp.Expr) -> bool:
+    """Whether the structure of ``e`` proves it real (nothing is evaluated)."""
+    if e.is_Number:
+        return e.is_real is True and e not in (sp.oo, -sp.oo)
+    if e.is_NumberSymbol or isinstance(e, sp.Symbol | AppliedUndef):
+        return e.is_real is True
+    if e.is_Add or e.is_Mul:
+        return all(_proven_real(a) for a in e.args)
+    if e.is_Pow:
+        return (_proven_real(e.base) and e.exp.is_Integer and int(e.exp) >= 0) or (
+            proven_sign(e.base) == "pos" and _proven_real(e.exp)
+        )
+    if isinstance(e, sp.sin | sp.cos | sp.exp | sp.sinh | sp.cosh | sp.tanh | sp.atan):
+        return _proven_real(e.args[0])
+    return False

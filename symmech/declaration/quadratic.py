@@ -12,20 +12,27 @@ reads ``(sum of parameter products) * (function of q)``.
 The walk also decides whether T is a quadratic form at all: every velocity-dependent part
 must be a product of exactly two linear forms (or a square), and no part may be free of
 the velocities.
+
+:func:`linear_form_row` reads the coefficients of a linear form (a constraint one-form
+``mu_i(q) v^i``) by differentiation, and decides linearity and homogeneity by evaluation
+at sample points, so its cost stays linear in the size of the input.
 """
 
 from __future__ import annotations
 
 from collections import Counter, defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
 
 import sympy as sp
+
+from symmech.declaration.numeric import vanishes
 
 __all__ = [
     "NotQuadraticError",
     "group_by_factor",
     "linear_coefficients",
+    "linear_form_row",
     "metric_from_kinetic_energy",
 ]
 
@@ -212,3 +219,60 @@ def metric_from_kinetic_energy(
     for (i, j), terms in out.items():
         G[i, j] = G[j, i] = group_by_factor(terms, qset)
     return G
+
+
+def linear_form_row(
+    e: sp.Expr,
+    v: Sequence[sp.Symbol],
+    points: Callable[[sp.Expr], Sequence[Mapping]],
+) -> list[sp.Expr]:
+    """The coefficients ``[mu_1, ..., mu_n]`` of ``e = mu_i(q) v^i``: ``mu_i = de/dv^i``.
+
+    ``e`` must be linear and homogeneous in the velocities ``v``: every second derivative
+    ``d^2 e / dv^i dv^j`` and the velocity-free part ``e(v = 0)`` vanish identically, and
+    some coefficient does not.  "Vanishes identically" is decided exactly where sympy's
+    automatic simplification already gives 0, else by
+    :func:`~symmech.declaration.numeric.vanishes` at ``points(expr)``, sample points giving
+    values to every symbol of ``expr`` (``sympy.simplify`` is never called: a constraint
+    of a few hundred operations can keep it busy for many minutes).  A coefficient written
+    with velocities that cancel is returned without them.  Raises
+    :class:`NotQuadraticError` saying what is wrong.
+    """
+    zero = dict.fromkeys(v, 0)
+    row = [sp.diff(e, vj) for vj in v]
+    nonlinear = []
+    for j, r in enumerate(row):
+        inside = [vk for vk in v if vk in r.free_symbols]
+        if not inside:
+            continue
+        pts = points(r)
+        if all(vanishes(sp.diff(r, vk), pts) is True for vk in inside):
+            row[j] = r.xreplace(zero)  # written with velocities that cancel
+        else:
+            nonlinear.append(str(v[j]))
+    if nonlinear:
+        raise NotQuadraticError(
+            e,
+            f"is not linear in the velocities (nonlinear in {nonlinear}); constraints must be"
+            " one-forms mu_i(q) q_dot^i",
+        )
+    pts = points(e)
+    if all(r == 0 or vanishes(r, pts) is True for r in row):
+        raise NotQuadraticError(
+            e,
+            f"does not involve any velocity {sorted(map(str, v))}; a holonomic constraint"
+            " h(q) = 0 is given by its differential dh (h_dot = 0)",
+        )
+    offset = e.xreplace(zero)
+    if offset != 0 and vanishes(offset, pts) is not True:
+        raise NotQuadraticError(
+            e,
+            f"has the velocity-free part {_short(offset)}; constraints must be linear"
+            " (homogeneous) in the velocities",
+        )
+    return row
+
+
+def _short(expr: object, limit: int = 60) -> str:
+    s = str(expr)
+    return s if len(s) <= limit else s[: limit - 3] + "..."

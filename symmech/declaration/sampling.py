@@ -3,6 +3,14 @@
 Used where a symbolic check would be too expensive or undecidable: positive definiteness
 of a metric, independence of constraints.  A check "at sampled points" evaluates at a few
 random points drawn here; it is a generic statement (it holds off a measure-zero set).
+
+Besides symbols, an "atom" may be an undefined applied function ``g(x)`` or a derivative
+``Derivative(g(x), x)``: such an atom stands for an unknown smooth real function, and gets
+a random real value of its own (honouring ``positive=`` etc. given to ``sympy.Function``).
+
+The order in which values are drawn is fixed by the atoms' names and their full
+``srepr`` (which includes the assumptions), never by hashes, so the points are the same in
+every process whatever ``PYTHONHASHSEED`` is.
 """
 
 from __future__ import annotations
@@ -12,10 +20,15 @@ from collections.abc import Iterable
 
 import sympy as sp
 
-__all__ = ["sample_point", "sample_points"]
+__all__ = ["atom_key", "sample_point", "sample_points"]
 
 
-def _sample(sym: sp.Symbol, rng: random.Random) -> sp.Rational:
+def atom_key(atom: sp.Basic) -> tuple[str, str]:
+    """A total, process-independent order on symbols and other atoms: (name, srepr)."""
+    return (str(atom), sp.srepr(atom))
+
+
+def _sample(sym: sp.Basic, rng: random.Random) -> sp.Rational:
     # Rationals keep the downstream evaluation exact when sympy can do it.
     def rat(lo: float, hi: float) -> sp.Rational:
         return sp.Rational(rng.randint(int(lo * 1000), int(hi * 1000)), 1000)
@@ -39,15 +52,15 @@ def _sample(sym: sp.Symbol, rng: random.Random) -> sp.Rational:
     return rat(-1.5, 1.5)
 
 
-def sample_point(symbols: Iterable[sp.Symbol], rng: random.Random) -> dict[sp.Symbol, sp.Rational]:
+def sample_point(symbols: Iterable[sp.Basic], rng: random.Random) -> dict[sp.Basic, sp.Rational]:
     """One random rational value per symbol, honouring positive/negative/integer assumptions."""
     return {s: _sample(s, rng) for s in symbols}
 
 
 def sample_points(
-    symbols: Iterable[sp.Symbol], count: int = 4, seed: int = 20010101
-) -> list[dict[sp.Symbol, sp.Rational]]:
+    symbols: Iterable[sp.Basic], count: int = 4, seed: int = 20010101
+) -> list[dict[sp.Basic, sp.Rational]]:
     """``count`` reproducible random points (fixed seed, so a failing check is repeatable)."""
-    syms = sorted(set(symbols), key=lambda s: s.name)
+    syms = sorted(set(symbols), key=atom_key)
     rng = random.Random(seed)
     return [sample_point(syms, rng) for _ in range(count)]

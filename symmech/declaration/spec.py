@@ -11,21 +11,72 @@ a frozen :class:`Declaration` in a normal form the later layers rely on:
 * ``walls``: the walls with psi and impulsive-constraint rows resolved.
 
 Validation collects every problem it finds and raises one :class:`~symmech.SceneError`
-listing all of them (as ``sympy.physics.mechanics``' ``validate`` does).
+listing all of them (as ``sympy.physics.mechanics``' ``validate`` does).  It runs in three
+stages, and every field goes through each stage whatever the other fields hold; a check
+that needs an earlier result (the positive definiteness of a metric whose symbols are
+wrong, the independence of constraints one of which is not linear) is skipped when that
+result is missing:
+
+1. structure: coordinates (a scene without valid coordinates stops here), the velocity
+   basis, ``parameters=``, the shape of every field and the parsing of strings;
+2. symbols, field by field: what may appear where (coordinates everywhere; the velocities
+   only in the kinetic energy and the constraints; t only in the potential and the
+   walls), names shared by different symbols, non-smooth functions;
+3. properties: the metric is symmetric and positive definite, T is a quadratic form,
+   constraints are linear and homogeneous in the velocities and independent, walls
+   depend on the coordinates.
+
+Rules the stages enforce:
+
+* One name, one symbol.  A symbol with the name of a coordinate, a velocity, a
+  quasi-velocity, t or a declared parameter must be that symbol: ``Symbol("r")`` next to
+  the coordinate ``r`` (real) is refused, not made a parameter.  Two different symbols with
+  one name (``Symbol("a", positive=True)`` and ``Symbol("a")``) are refused, and so is a
+  parameter listed twice.
+* ``parameters=`` omitted: the parameters are every other free symbol, sorted by name
+  (names are unique, so the order does not depend on the process).  Given: any other
+  symbol is refused as unknown.
+* Undefined functions (``sympy.Function("g")(x)``) are allowed in every field, with or
+  without ``parameters=``, as unknown smooth real functions of their arguments; their
+  arguments obey the field's rules (``g(xdot)`` is refused in a metric).  They are never
+  parameters.  Checks at sampled points give ``g(x)`` (and each derivative of it) a random
+  real value honouring the function's assumptions (``positive=True``): a metric
+  ``diag(1 + g(x)**2, 1)`` is accepted, ``diag(g(x), 1)`` is refused unless ``g`` is
+  declared positive.
+* Properties are decided symbolically where that is cheap and certain (a diagonal metric
+  whose entries are sums and products of positive terms is positive definite) and
+  otherwise at a few random points honouring the symbols' assumptions, by exact rational
+  inputs and float64 or 50-digit arithmetic.  ``sympy.simplify`` is never applied to user
+  input: each check costs a few walks of the expression tree (a constraint of a few hundred
+  operations once kept ``simplify`` busy for more than ten minutes).  A metric is refused when it is
+  indefinite at a sampled point or singular at every one (its determinant vanishes
+  identically); ``diag(1, x**2)``, singular only at x = 0, is accepted.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+import itertools
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from symmech.declaration.expressions import to_expression
-from symmech.declaration.numeric import evaluate_matrix
-from symmech.declaration.quadratic import NotQuadraticError, metric_from_kinetic_energy
-from symmech.declaration.sampling import sample_points
+from symmech.declaration.numeric import (
+    EvaluationError,
+    classify_symmetric,
+    proven_sign,
+    rank_at,
+    real_values,
+    vanishes,
+)
+from symmech.declaration.quadratic import (
+    NotQuadraticError,
+    linear_form_row,
+    metric_from_kinetic_energy,
+)
+from symmech.declaration.sampling import atom_key, sample_points
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.symbols import velocity_of
 from symmech.declaration.wall import Wall
@@ -51,9 +102,8 @@ NON_SMOOTH = (
     sp.arg,
 )
 
-# Symbolic checks on expressions above this size are replaced by checks at sampled points.
-_SYMBOLIC_CHECK_OPS = 400
-_SAMPLES = 5
+_SAMPLES = 4
+_EXTRA_SEED = 19970521  # seed of the values of velocities and undefined functions
 
 
 @dataclass(frozen=True)
@@ -129,28 +179,63 @@ def _short(expr: object, limit: int = 60) -> str:
     return s if len(s) <= limit else s[: limit - 3] + "..."
 
 
+def _entries(expr: sp.Basic | sp.MatrixBase) -> list[sp.Basic]:
+    return list(expr) if isinstance(expr, sp.MatrixBase) else [expr]
+
+
 def _non_smooth(expr: sp.Basic | sp.MatrixBase) -> list[str]:
-    entries = list(expr) if isinstance(expr, sp.MatrixBase) else [expr]
-    applied = set().union(*[e.atoms(sp.Function, sp.Max, sp.Min) for e in entries])
+    applied = set().union(*[e.atoms(sp.Function, sp.Max, sp.Min) for e in _entries(expr)])
     return sorted({type(f).__name__ for f in applied if isinstance(f, NON_SMOOTH)})
 
 
-def _is_zero(expr: sp.Expr, points: list[dict]) -> bool | None:
-    """Decide expr == 0: symbolically when small, else by exact evaluation at sample points."""
-    expr = sp.sympify(expr)
-    if expr == 0:
-        return True
-    if sp.count_ops(expr) <= _SYMBOLIC_CHECK_OPS:
-        simplified = sp.simplify(expr)
-        if simplified == 0:
-            return True
-        if simplified.is_number and simplified != 0:
-            return False
-    for point in points:
-        value = sp.N(expr.subs(point), 30)
-        if value.is_number and abs(complex(value)) > 1e-20:
-            return False
-    return True
+def _unknown_functions(expr: sp.Basic | sp.MatrixBase) -> set[sp.Basic]:
+    """Undefined applied functions g(x) and their derivatives: atoms without a formula."""
+    return {a for a in _atoms(expr) if not isinstance(a, sp.Symbol)}
+
+
+def _atoms(*exprs: sp.Basic | sp.MatrixBase) -> set[sp.Basic]:
+    """Free symbols, undefined functions g(x) and derivatives of them, in one walk that
+    visits each shared subtree once."""
+    out: set[sp.Basic] = set()
+    seen: set[sp.Basic] = set()
+    stack = [e for x in exprs for e in _entries(x)]
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if isinstance(e, AppliedUndef | sp.Derivative):
+            out.add(e)
+            out |= e.free_symbols
+        elif isinstance(e, sp.Symbol):
+            out.add(e)
+        elif e.args:
+            stack.extend(e.args)
+    return out
+
+
+def _assumptions(s: sp.Symbol) -> str:
+    if isinstance(s, sp.Dummy):
+        return "(a sympy Dummy)"
+    orig = getattr(s, "_assumptions_orig", None)
+    if orig is None:  # pragma: no cover - sympy < 1.12
+        orig = {k: v for k, v in s.assumptions0.items() if k != "commutative"}
+    items = [f"{k}={v}" for k, v in sorted(orig.items()) if k != "commutative" or not v]
+    return f"({', '.join(items)})" if items else "(no assumptions)"
+
+
+def _differs(s: sp.Symbol) -> str:
+    return "is a sympy Dummy" if isinstance(s, sp.Dummy) else "different assumptions"
+
+
+def _at(point: Mapping, about: sp.Basic | sp.MatrixBase) -> str:
+    """`` at the sampled point {x=1/2, y=-3/4}`` for the atoms of ``about`` (empty for a
+    constant)."""
+    keep = _atoms(about)
+    items = sorted((kv for kv in point.items() if kv[0] in keep), key=lambda kv: atom_key(kv[0]))
+    if not items:
+        return ""
+    return " at the sampled point {" + ", ".join(f"{k}={v}" for k, v in items) + "}"
 
 
 class _Problems:
@@ -163,6 +248,43 @@ class _Problems:
     def raise_if_any(self) -> None:
         if self.items:
             raise SceneError(self.items)
+
+
+@dataclass
+class _Field:
+    """One field of the declaration, as parsed: an expression or a matrix of them."""
+
+    label: str
+    value: sp.Basic | sp.MatrixBase
+    allowed: frozenset  # symbols it may contain besides the parameters
+    in_velocities: bool = False  # written in the velocities (T, a constraint expression)
+    ok: bool = True  # no problem with its symbols: its properties can be checked
+
+    @property
+    def symbols(self) -> set[sp.Symbol]:
+        return set().union(*[e.free_symbols for e in _entries(self.value)])
+
+
+@dataclass(frozen=True)
+class _Reserved:
+    symbol: sp.Symbol
+    role: str  # "the coordinate r"
+    use: str  # what to write instead
+
+
+class _Points:
+    """Sample points: coordinates, parameters and t as in every check of symmech, plus
+    values for any other atom an expression contains (velocities, undefined functions)."""
+
+    def __init__(self, base_symbols: Iterable[sp.Symbol]):
+        self.base = sample_points(base_symbols, count=_SAMPLES)
+
+    def for_(self, *exprs: sp.Basic | sp.MatrixBase) -> list[dict]:
+        missing = _atoms(*exprs) - set(self.base[0])
+        if not missing:
+            return self.base
+        extra = sample_points(missing, count=_SAMPLES, seed=_EXTRA_SEED)
+        return [{**b, **x} for b, x in zip(self.base, extra, strict=True)]
 
 
 # ---------------------------------------------------------------------------------------
@@ -184,12 +306,185 @@ def declare(
 ) -> Declaration:
     """Validate a scene's inputs and return its :class:`Declaration`.
 
-    Raises :class:`~symmech.SceneError` listing every problem found.  See
-    :class:`symmech.Scene` for the meaning of the arguments.
+    Raises :class:`~symmech.SceneError` listing every problem found (see the module
+    docstring for the rules).  See :class:`symmech.Scene` for the meaning of the arguments.
     """
     problems = _Problems()
 
-    # -- coordinates -------------------------------------------------------------------
+    # -- stage 1: structure ----------------------------------------------------------------
+    q = _coordinate_symbols(coordinates)
+    n = len(q)
+    qd = tuple(velocity_of(c) for c in q)
+    constraint_items = _items(constraints)
+    wall_list = _wall_items(walls, problems)
+    v = _velocity_basis(frame, quasi_velocities, q, qd, problems)
+    basis_ok = v is not None
+    v = v if v is not None else qd
+    has_frame = basis_ok and v != qd
+    reserved = _reserved_names(q, qd, v if has_frame else ())
+    explicit = None
+    if parameters is not None:
+        explicit = _explicit_parameters(parameters, reserved, problems)
+        for p in explicit:
+            reserved.setdefault(
+                p.name, _Reserved(p, f"the parameter {p}", "the symbol given in parameters=")
+            )
+
+    # the symbol table for string inputs: coordinates, velocities, t, parameters (declared,
+    # or found in the sympy-valued inputs)
+    table: dict[str, sp.Basic] = {name_: r.symbol for name_, r in reserved.items()}
+    if explicit is None:
+        found = _sympy_symbols(metric, kinetic_energy, potential, frame, constraint_items)
+        for w in wall_list:
+            if isinstance(w, Wall):
+                found |= _sympy_symbols(w.psi, w.impulsive_constraints, w.restitution)
+        for s in sorted(found, key=atom_key):
+            table.setdefault(s.name, s)
+
+    def expr(value: object, label: str) -> sp.Expr | None:
+        try:
+            return to_expression(value, table, field=label)
+        except ValueError as exc:
+            problems.add(str(exc))
+            return None
+
+    def matrix(value: object, label: str) -> sp.Matrix | None:
+        raw = _raw_matrix(value, label, n, problems)
+        if raw is None:
+            return None
+        entries = [expr(raw[i][j], f"{label}[{i},{j}]") for i in range(n) for j in range(n)]
+        return None if any(e is None for e in entries) else sp.Matrix(n, n, entries)
+
+    q_set, t_set, v_set = frozenset(q), frozenset({TIME}), frozenset(v)
+    fields: list[_Field] = []
+    S = G = T = None
+    frame_field = metric_field = None
+    if frame is not None:
+        S = matrix(frame, "frame")
+        if S is not None:
+            fields.append(frame_field := _Field("frame", S, q_set))
+    if (metric is None) == (kinetic_energy is None):
+        problems.add("metric: give exactly one of 'metric' and 'kinetic_energy'")
+    elif metric is not None:
+        G = matrix(metric, "metric")
+        if G is not None:
+            fields.append(metric_field := _Field("metric", G, q_set))
+    else:
+        T = expr(kinetic_energy, "kinetic_energy")
+        if T is not None:
+            fields.append(metric_field := _Field("kinetic_energy", T, q_set | v_set, True))
+    V = expr(potential if potential is not None else 0, "potential")
+    if V is not None:
+        fields.append(_Field("potential", V, q_set | t_set))
+    constraint_fields = [
+        _velocity_form_field(c, f"constraints[{a}]", n, q_set, v_set, expr, problems)
+        for a, c in enumerate(constraint_items)
+    ]
+    fields += [f for f in constraint_fields if f is not None]
+    wall_fields = []
+    for k, w in enumerate(wall_list):
+        label = f"walls[{k}]" + (f" ({w.name!r})" if isinstance(w, Wall) and w.name else "")
+        if not isinstance(w, Wall):
+            problems.add(f"{label}: expected a symmech.Wall, got {type(w).__name__}")
+            continue
+        psi = expr(w.psi, f"{label}.psi")
+        psi_field = _Field(f"{label}.psi", psi, q_set | t_set) if psi is not None else None
+        nu_fields = [
+            _velocity_form_field(
+                c, f"{label}.impulsive_constraints[{A}]", n, q_set | t_set, v_set, expr, problems
+            )
+            for A, c in enumerate(w.impulsive_constraints)
+        ]
+        alpha = _Field(f"{label}.restitution", sp.sympify(w.restitution), frozenset())
+        wall_fields.append((k, label, w, psi_field, nu_fields))
+        fields += [f for f in (psi_field, *nu_fields, alpha) if f is not None]
+    names = [w.name for w in wall_list if isinstance(w, Wall) and w.name]
+    dup = sorted({x for x in names if names.count(x) > 1})
+    if dup:
+        problems.add(f"walls: names {dup} are used by more than one wall")
+
+    # -- stage 2: symbols, field by field ----------------------------------------------------
+    rules = _SymbolRules(q, qd, v, has_frame, reserved, explicit)
+    for f in fields:
+        rules.check(f, problems)
+    params = explicit if explicit is not None else rules.default_parameters(problems)
+
+    # -- stage 3: properties -------------------------------------------------------------------
+    points = _Points([*q, *params, TIME])
+    if frame_field is not None and frame_field.ok:
+        _check_frame(S, points, problems)
+    if metric_field is not None and metric_field.ok and G is not None:
+        _check_metric(G, "metric", points, problems)
+    elif metric_field is not None and metric_field.ok and T is not None and basis_ok:
+        G = _metric_from_kinetic_energy(T, v, q, problems)
+        if G is not None:
+            _check_metric(G, "kinetic_energy (its metric, the Hessian of T)", points, problems)
+
+    rows = [
+        _constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
+        for f in constraint_fields
+    ]
+    m = len(constraint_items)
+    mu = sp.zeros(0, n)
+    if m >= n:
+        problems.add(
+            f"constraints: {m} constraints for {n} coordinates leave no admissible motion;"
+            " a scene needs fewer constraints than coordinates"
+        )
+    if m and all(r is not None for r in rows):
+        mu = sp.Matrix(rows)
+        if m < n:
+            _check_independent(mu, points, "constraints", problems)
+
+    resolved: list[tuple[Wall, sp.Expr, sp.Matrix]] = []
+    for _k, label, w, psi_field, nu_fields in wall_fields:
+        if psi_field is not None and psi_field.ok and not (psi_field.value.free_symbols & q_set):
+            problems.add(
+                f"{label}.psi = {_short(psi_field.value)} does not depend on the coordinates"
+                f" {list(q)}"
+            )
+        nu_rows = [
+            _constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
+            for f in nu_fields
+        ]
+        if psi_field is None or any(r is None for r in nu_rows):
+            continue
+        nu = sp.Matrix(nu_rows) if nu_rows else sp.zeros(0, n)
+        if nu.rows and mu.rows == m:
+            _check_independent(
+                mu.col_join(nu),
+                points,
+                f"{label}.impulsive_constraints (with the permanent constraints)",
+                problems,
+            )
+        resolved.append((w, psi_field.value, nu))
+    problems.raise_if_any()
+
+    walls_out = tuple(
+        ResolvedWall(wall=w, psi=psi, impulsive_matrix=sp.ImmutableMatrix(nu), index=k)
+        for k, (w, psi, nu) in enumerate(resolved)
+    )
+    return Declaration(
+        coordinates=q,
+        velocities=v,
+        coordinate_velocities=qd,
+        frame=sp.ImmutableMatrix(S) if S is not None else None,
+        metric=sp.ImmutableMatrix(G),
+        potential=sp.sympify(V),
+        constraint_matrix=sp.ImmutableMatrix(mu),
+        walls=walls_out,
+        parameters=tuple(params),
+        name=name or "scene",
+        kinetic_energy_given=T is not None,
+    )
+
+
+# ---------------------------------------------------------------------------------------
+# stage 1: structure
+
+
+def _coordinate_symbols(coordinates: object) -> tuple[sp.Symbol, ...]:
+    """The coordinates; a problem here stops validation (nothing can be checked without)."""
     if isinstance(coordinates, sp.Symbol):
         coordinates = (coordinates,)
     try:
@@ -203,258 +498,336 @@ def declare(
     bad = [c for c in q if not isinstance(c, sp.Symbol)]
     if bad:
         raise SceneError(f"coordinates: {bad} are not sympy Symbols (use symmech.coordinates)")
-    if len(set(q)) != len(q):
-        raise SceneError(f"coordinates: repeated coordinates in {list(q)}")
+    if len(set(q)) != len(q) or len({c.name for c in q}) != len(q):
+        raise SceneError(f"coordinates: repeated coordinates (or names) in {list(q)}")
     if TIME in q or any(c.name == "t" for c in q):
         raise SceneError("coordinates: 't' is reserved for time (symmech.t)")
-    n = len(q)
-    qd = tuple(velocity_of(c) for c in q)
-    clash = [c for c in q if c in qd]
+    velocity_names = {velocity_of(c).name for c in q}
+    clash = [c for c in q if c.name in velocity_names]
     if clash:
         raise SceneError(f"coordinates: {clash} collide with velocity names of other coordinates")
+    return q
 
-    # -- frame / quasi-velocities ------------------------------------------------------
-    S: sp.ImmutableMatrix | None = None
+
+def _velocity_basis(
+    frame: object,
+    quasi_velocities: object,
+    q: tuple[sp.Symbol, ...],
+    qd: tuple[sp.Symbol, ...],
+    problems: _Problems,
+) -> tuple[sp.Symbol, ...] | None:
+    """The velocity basis: the quasi-velocities with a frame, else q_dot; None if invalid."""
+    n = len(q)
     if (frame is None) != (quasi_velocities is None):
         problems.add("frame: 'frame' and 'quasi_velocities' must be given together")
-        problems.raise_if_any()
-    if quasi_velocities is not None:
-        if isinstance(quasi_velocities, sp.Symbol):
-            quasi_velocities = (quasi_velocities,)
+        return None
+    if quasi_velocities is None:
+        return qd
+    if isinstance(quasi_velocities, sp.Symbol):
+        quasi_velocities = (quasi_velocities,)
+    try:
         v = tuple(quasi_velocities)
-        if len(v) != n or not all(isinstance(s, sp.Symbol) for s in v):
-            raise SceneError(
-                f"quasi_velocities: expected {n} sympy Symbols (one per coordinate), got {list(v)}"
-            )
-        if len(set(v)) != n or set(v) & (set(q) | set(qd) | {TIME}):
-            raise SceneError(
-                f"quasi_velocities: {list(v)} must be distinct and differ from the coordinates,"
-                " their velocities and t"
-            )
-    else:
-        v = qd
+    except TypeError:
+        problems.add(f"quasi_velocities: expected {n} sympy Symbols, got {quasi_velocities!r}")
+        return None
+    if len(v) != n or not all(isinstance(s, sp.Symbol) for s in v):
+        problems.add(
+            f"quasi_velocities: expected {n} sympy Symbols (one per coordinate), got {list(v)}"
+        )
+        return None
+    taken = {s.name for s in (*q, *qd, TIME)}
+    if len({s.name for s in v}) != n or any(s.name in taken for s in v):
+        problems.add(
+            f"quasi_velocities: {list(v)} must have distinct names, different from the"
+            " coordinates, their velocities and t"
+        )
+        return None
+    return v
 
-    # the symbol table for string inputs: coordinates, velocities, t, declared parameters
-    table: dict[str, sp.Basic] = {s.name: s for s in (*q, *qd, *v, TIME)}
-    if parameters is not None:
-        if isinstance(parameters, sp.Symbol):
-            parameters = (parameters,)
-        parameters = tuple(parameters)
-        badp = [p for p in parameters if not isinstance(p, sp.Symbol)]
-        if badp:
-            raise SceneError(f"parameters: {badp} are not sympy Symbols")
-        overlap = set(parameters) & set(table.values())
-        if overlap:
-            raise SceneError(
-                f"parameters: {sorted(map(str, overlap))} are coordinates, velocities or t"
-            )
-        table.update({p.name: p for p in parameters})
-    else:
-        # parameters found in sympy-valued inputs may be used by name in string inputs
-        for value in (metric, kinetic_energy, potential, frame, *list(constraints or [])):
-            for s in getattr(
-                sp.sympify(value) if isinstance(value, sp.Basic) else value, "free_symbols", ()
-            ):
-                table.setdefault(s.name, s)
 
-    def expr(value: object, field: str) -> sp.Expr | None:
-        try:
-            return to_expression(value, table, field=field)
-        except ValueError as exc:
-            problems.add(str(exc))
-            return None
+def _reserved_names(
+    q: Sequence[sp.Symbol], qd: Sequence[sp.Symbol], v: Sequence[sp.Symbol]
+) -> dict[str, _Reserved]:
+    out = {TIME.name: _Reserved(TIME, "the time t", "symmech.t")}
+    for c in q:
+        out[c.name] = _Reserved(c, f"the coordinate {c}", "the coordinate (symmech.coordinates)")
+    for c, d in zip(q, qd, strict=True):
+        out[d.name] = _Reserved(d, f"the velocity {d} of coordinate {c}", "symmech.velocities")
+    for s in v:
+        out[s.name] = _Reserved(s, f"the quasi-velocity {s}", "the symbol in quasi_velocities")
+    return out
 
-    if frame is not None:
-        S0 = _raw_matrix(frame, "frame")
-        shape = (len(S0), len(S0[0]) if S0 else 0)
-        if shape != (n, n):
-            raise SceneError(f"frame: expected an {n} x {n} matrix (q_dot = S v), got {shape}")
-        entries = [expr(S0[i][j], f"frame[{i},{j}]") for i in range(n) for j in range(n)]
-        problems.raise_if_any()
-        S = sp.ImmutableMatrix(n, n, entries)
 
-    # -- metric / kinetic energy -------------------------------------------------------
-    kinetic_given = False
-    if (metric is None) == (kinetic_energy is None):
-        problems.add("metric: give exactly one of 'metric' and 'kinetic_energy'")
-        problems.raise_if_any()
-    if metric is not None:
-        G0 = _raw_matrix(metric, "metric")
-        shape = (len(G0), len(G0[0]) if G0 else 0)
-        if shape != (n, n):
-            if shape[0] != shape[1]:
-                raise SceneError(f"metric: not square, shape {shape}")
-            raise SceneError(f"metric: shape {shape} does not match the {n} coordinates")
-        entries = [expr(G0[i][j], f"metric[{i},{j}]") for i in range(n) for j in range(n)]
-        problems.raise_if_any()
-        G = sp.Matrix(n, n, entries)
-    else:
-        kinetic_given = True
-        T = expr(kinetic_energy, "kinetic_energy")
-        problems.raise_if_any()
-        G = _metric_from_kinetic_energy(T, v, q, problems)
-        problems.raise_if_any()
+def _explicit_parameters(
+    parameters: object, reserved: Mapping[str, _Reserved], problems: _Problems
+) -> tuple[sp.Symbol, ...]:
+    """The declared parameters that are usable (each problem is recorded)."""
+    if isinstance(parameters, sp.Symbol):
+        parameters = (parameters,)
+    try:
+        given = tuple(parameters)
+    except TypeError:
+        problems.add(f"parameters: expected a sequence of sympy Symbols, got {parameters!r}")
+        return ()
+    bad = [p for p in given if not isinstance(p, sp.Symbol)]
+    if bad:
+        problems.add(f"parameters: {bad} are not sympy Symbols")
+    out: list[sp.Symbol] = []
+    by_name: dict[str, sp.Symbol] = {}
+    for p in given:
+        if not isinstance(p, sp.Symbol):
+            continue
+        r = reserved.get(p.name)
+        if r is not None:
+            if r.symbol == p:
+                problems.add(f"parameters: {p} is {r.role}, not a parameter")
+            else:
+                problems.add(
+                    f"parameters: symbol {p} {_assumptions(p)} has the same name as {r.role}"
+                    f" {_assumptions(r.symbol)} but {_differs(p)}; a name denotes one"
+                    f" symbol (use {r.use})"
+                )
+            continue
+        if p.name in by_name:
+            first = by_name[p.name]
+            if first == p:
+                problems.add(f"parameters: {p} is listed more than once")
+            else:
+                problems.add(
+                    f"parameters: symbols {first} {_assumptions(first)} and {p}"
+                    f" {_assumptions(p)} share the name {p.name!r} with different assumptions;"
+                    " a name denotes one symbol"
+                )
+            continue
+        by_name[p.name] = p
+        out.append(p)
+    return tuple(out)
 
-    V = expr(potential if potential is not None else 0, "potential")
-    problems.raise_if_any()
 
-    # -- constraints --------------------------------------------------------------------
-    rows: list[list[sp.Expr]] = []
+def _items(constraints: object) -> list[object]:
+    """The constraints as a list (a generator is read once)."""
+    if constraints is None:
+        return []
     if isinstance(constraints, sp.MatrixBase):
-        constraints = [list(constraints.row(i)) for i in range(constraints.rows)]
-    elif isinstance(constraints, (str, sp.Basic)):
-        constraints = [constraints]
-    for a, c in enumerate(constraints or ()):
-        row = _constraint_row(c, v, f"constraints[{a}]", expr, problems)
-        if row is not None:
-            rows.append(row)
-    problems.raise_if_any()
-    mu = sp.Matrix(len(rows), n, [e for r in rows for e in r]) if rows else sp.zeros(0, n)
+        return [list(constraints.row(i)) for i in range(constraints.rows)]
+    if isinstance(constraints, (str, sp.Basic)):
+        return [constraints]
+    try:
+        return list(constraints)
+    except TypeError:
+        return [constraints]
 
-    # -- walls ----------------------------------------------------------------------------
-    wall_list = list(walls or ())
-    resolved: list[tuple[Wall, sp.Expr, sp.Matrix]] = []
-    for k, w in enumerate(wall_list):
-        label = f"walls[{k}]" + (f" ({w.name!r})" if isinstance(w, Wall) and w.name else "")
-        if not isinstance(w, Wall):
-            problems.add(f"{label}: expected a symmech.Wall, got {type(w).__name__}")
-            continue
-        psi = expr(w.psi, f"{label}.psi")
-        nu_rows = []
-        for A, c in enumerate(w.impulsive_constraints):
-            r = _constraint_row(c, v, f"{label}.impulsive_constraints[{A}]", expr, problems)
-            if r is not None:
-                nu_rows.append(r)
-        if psi is None:
-            continue
-        if not (psi.free_symbols & set(q)):
-            problems.add(
-                f"{label}.psi = {_short(psi)} does not depend on the coordinates {list(q)}"
-            )
-        if psi.free_symbols & (set(qd) | set(v)):
-            problems.add(
-                f"{label}.psi = {_short(psi)} contains velocities; psi is a function of (t, q)"
-            )
-        nu = (
-            sp.Matrix(len(nu_rows), n, [e for r in nu_rows for e in r])
-            if nu_rows
-            else sp.zeros(0, n)
+
+def _wall_items(walls: object, problems: _Problems) -> list[object]:
+    if walls is None:
+        return []
+    if isinstance(walls, Wall):
+        return [walls]
+    try:
+        return list(walls)
+    except TypeError:
+        problems.add(f"walls: expected a list of symmech.Wall, got {walls!r}")
+        return []
+
+
+def _sympy_symbols(*values: object) -> set[sp.Symbol]:
+    """Free symbols of every sympy object inside ``values`` (nested lists, matrices)."""
+    out: set[sp.Symbol] = set()
+    stack = list(values)
+    while stack:
+        value = stack.pop()
+        if isinstance(value, sp.Basic | sp.MatrixBase):
+            out |= {s for s in value.free_symbols if isinstance(s, sp.Symbol)}
+        elif isinstance(value, list | tuple):
+            stack.extend(value)
+    return out
+
+
+def _raw_matrix(value: object, field: str, n: int, problems: _Problems) -> list | None:
+    """Rows of an n x n matrix input, entries untouched (strings are parsed later)."""
+    if isinstance(value, sp.MatrixBase):
+        rows = [list(value.row(i)) for i in range(value.rows)]
+    elif isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        problems.add(
+            f"{field}: expected a square matrix (sympy Matrix or nested lists), got {value!r}"
         )
-        resolved.append((w, psi, nu))
-    names = [w.name for w in wall_list if isinstance(w, Wall) and w.name]
-    dup = sorted({x for x in names if names.count(x) > 1})
-    if dup:
-        problems.add(f"walls: names {dup} are used by more than one wall")
-    problems.raise_if_any()
-
-    # -- symbols -----------------------------------------------------------------------------
-    q_set, qd_set, v_set = set(q), set(qd), set(v)
-    # symbols and smoothness are checked on what the user wrote (T is smaller than g)
-    first = ("metric", G, q_set) if not kinetic_given else ("kinetic_energy", T, q_set | v_set)
-    fields: list[tuple[str, sp.Basic, set]] = [first, ("potential", V, q_set | {TIME})]
-    if S is not None:
-        fields.append(("frame", S, q_set))
-    fields.append(("constraints", mu, q_set))
-    for k, (w, psi, nu) in enumerate(resolved):
-        fields.append((f"walls[{k}].psi", psi, q_set | {TIME}))
-        fields.append((f"walls[{k}].impulsive_constraints", nu, q_set | {TIME}))
-        # a symbolic restitution alpha is a parameter of the scene like any other
-        fields.append((f"walls[{k}].restitution", sp.sympify(w.restitution), set()))
-    if parameters is None:
-        found: set[sp.Symbol] = set()
-        for _, e, allowed in fields:
-            found |= {s for s in e.free_symbols if s not in allowed}
-        found -= qd_set | v_set | {TIME} | q_set
-        params = tuple(sorted(found, key=lambda s: s.name))
+        return None
     else:
-        params = tuple(parameters)
-    p_set = set(params)
-    for field, e, allowed in fields:
-        if e is None:
-            continue
-        syms = e.free_symbols
-        vel = sorted(str(s) for s in (syms & (qd_set | v_set)) - allowed)
-        if vel:
-            problems.add(
-                f"{field}: contains velocity symbols {vel};"
-                " only coordinates and parameters may appear"
-            )
-        if TIME in syms and TIME not in allowed:
-            problems.add(f"{field}: depends on time t; only the potential and walls may")
-        unknown = sorted(str(s) for s in syms - allowed - p_set - qd_set - v_set - {TIME})
-        if unknown:
-            problems.add(
-                f"{field}: unknown symbols {unknown} (not coordinates or declared parameters)"
-            )
-        # a symbol that looks like the velocity of a coordinate that does not exist
-        ghost = sorted(
-            s.name
-            for s in syms - allowed - qd_set - v_set
-            if s.name.endswith("dot") and s.name[:-3] and s not in q_set
-        )
-        if ghost and parameters is None:
-            problems.add(
-                f"{field}: symbols {ghost} look like velocities of coordinates that are not in"
-                f" the scene {list(map(str, q))}"
-            )
-        bad_fn = _non_smooth(e)
-        if bad_fn:
-            problems.add(
-                f"{field}: contains non-smooth functions {bad_fn}; symmech needs smooth expressions"
-            )
-    problems.raise_if_any()
-
-    # -- metric properties ----------------------------------------------------------------------
-    points = sample_points([*q, *params, TIME])
-    _check_metric(G, points, problems)
-    if S is not None:
-        _check_frame(S, points, problems)
-    m = mu.rows
-    if m:
-        if m >= n:
-            problems.add(
-                f"constraints: {m} constraints for {n} coordinates leave no admissible motion;"
-                " a scene needs fewer constraints than coordinates"
-            )
+        rows = [
+            list(r) if hasattr(r, "__iter__") and not isinstance(r, (str, bytes)) else None
+            for r in value
+        ]
+        if any(r is None for r in rows):
+            problems.add(f"{field}: expected a matrix given as a list of rows, got {value!r}")
+            return None
+        if len({len(r) for r in rows}) > 1:
+            problems.add(f"{field}: rows of different lengths {[len(r) for r in rows]}")
+            return None
+    shape = (len(rows), len(rows[0]) if rows else 0)
+    if shape != (n, n):
+        if shape[0] != shape[1]:
+            problems.add(f"{field}: not square, shape {shape}")
         else:
-            _check_independent(mu, points, "constraints", problems)
-    for k, (w, _, nu) in enumerate(resolved):
-        label = f"walls[{k}]" + (f" ({w.name!r})" if w.name else "")
-        if nu.rows:
-            _check_independent(
-                mu.col_join(nu),
-                points,
-                f"{label}.impulsive_constraints (with the permanent constraints)",
-                problems,
+            what = "q_dot = S v" if field == "frame" else "one row per coordinate"
+            problems.add(
+                f"{field}: shape {shape} does not match the {n} coordinates (expected {n} x {n},"
+                f" {what})"
             )
-    problems.raise_if_any()
+        return None
+    return rows
 
-    walls_out = tuple(
-        ResolvedWall(wall=w, psi=psi, impulsive_matrix=sp.ImmutableMatrix(nu), index=k)
-        for k, (w, psi, nu) in enumerate(resolved)
-    )
-    return Declaration(
-        coordinates=q,
-        velocities=v,
-        coordinate_velocities=qd,
-        frame=S,
-        metric=sp.ImmutableMatrix(G),
-        potential=sp.sympify(V),
-        constraint_matrix=sp.ImmutableMatrix(mu),
-        walls=walls_out,
-        parameters=params,
-        name=name or "scene",
-        kinetic_energy_given=kinetic_given,
-    )
+
+def _velocity_form_field(
+    c: object,
+    label: str,
+    n: int,
+    allowed: frozenset,
+    v_set: frozenset,
+    expr: Callable[[object, str], sp.Expr | None],
+    problems: _Problems,
+) -> _Field | None:
+    """A constraint: a coefficient row (n entries) or an expression linear in the velocities."""
+    if isinstance(c, (list, tuple, sp.MatrixBase)):
+        entries = list(c)
+        if len(entries) != n:
+            problems.add(f"{label}: a coefficient row needs {n} entries, got {len(entries)}")
+            return None
+        out = [expr(e, f"{label}[{j}]") for j, e in enumerate(entries)]
+        if any(o is None for o in out):
+            return None
+        return _Field(label, sp.Matrix([out]), allowed)
+    e = expr(c, label)
+    return None if e is None else _Field(label, e, allowed | v_set, True)
 
 
 # ---------------------------------------------------------------------------------------
-# individual checks
+# stage 2: symbols
+
+
+class _SymbolRules:
+    """Which symbols may appear in which field; collects the parameter candidates."""
+
+    def __init__(
+        self,
+        q: Sequence[sp.Symbol],
+        qd: Sequence[sp.Symbol],
+        v: Sequence[sp.Symbol],
+        has_frame: bool,
+        reserved: Mapping[str, _Reserved],
+        explicit: Sequence[sp.Symbol] | None,
+    ):
+        self.q, self.q_set = q, set(q)
+        self.qd_set, self.v_set = set(qd), set(v)
+        self.v = v
+        self.has_frame = has_frame
+        self.reserved = reserved
+        self.explicit = None if explicit is None else set(explicit)
+        self.q_names = {c.name for c in q}
+        # candidate parameters (default mode): symbol -> first field it appears in
+        self.candidates: dict[sp.Symbol, str] = {}
+
+    def check(self, f: _Field, problems: _Problems) -> None:
+        syms = sorted(f.symbols, key=atom_key)
+        bad = False
+        # one name, one symbol
+        impostors = [
+            s for s in syms if s.name in self.reserved and s != self.reserved[s.name].symbol
+        ]
+        for s in impostors:
+            r = self.reserved[s.name]
+            problems.add(
+                f"{f.label}: symbol {s} {_assumptions(s)} has the same name as {r.role}"
+                f" {_assumptions(r.symbol)} but {_differs(s)}, so sympy treats it as"
+                f" another symbol; use {r.use}"
+            )
+            bad = True
+        syms = [s for s in syms if s not in impostors]
+        sset = set(syms)
+        velocities = sset & (self.qd_set | self.v_set) - f.allowed
+        if velocities and f.in_velocities and self.has_frame:
+            problems.add(
+                f"{f.label}: contains the coordinate velocities {_names(velocities)}; in a scene"
+                " with a frame the kinetic energy, constraints and impulsive constraints are"
+                f" written in the quasi-velocities {_names(self.v)} (q_dot = S v)"
+            )
+            bad = True
+        elif velocities and f.label.endswith(".psi"):
+            problems.add(
+                f"{f.label} = {_short(f.value)} contains velocities {_names(velocities)}; psi is"
+                " a function of (t, q)"
+            )
+            bad = True
+        elif velocities:
+            problems.add(
+                f"{f.label}: contains velocity symbols {_names(velocities)};"
+                " only coordinates and parameters may appear"
+            )
+            bad = True
+        if TIME in sset and TIME not in f.allowed:
+            problems.add(f"{f.label}: depends on time t; only the potential and walls may")
+            bad = True
+        coords = sset & self.q_set - f.allowed
+        if coords:
+            problems.add(
+                f"{f.label}: depends on the coordinates {_names(coords)}; it must be a number"
+                " or a parameter"
+            )
+            bad = True
+        others = [s for s in syms if s.name not in self.reserved]
+        if self.explicit is not None:
+            unknown = [s for s in others if s not in self.explicit]
+            if unknown:
+                problems.add(
+                    f"{f.label}: unknown symbols {_names(unknown)} (not coordinates or declared"
+                    " parameters)"
+                )
+                bad = True
+        else:
+            ghost = [
+                s.name
+                for s in others
+                if s.name.endswith("dot") and s.name[:-3] and s.name[:-3] not in self.q_names
+            ]
+            if ghost:
+                problems.add(
+                    f"{f.label}: symbols {ghost} look like velocities of coordinates that are"
+                    f" not in the scene {list(map(str, self.q))}"
+                )
+            for s in others:
+                self.candidates.setdefault(s, f.label)
+        bad_fn = _non_smooth(f.value)
+        if bad_fn:
+            problems.add(
+                f"{f.label}: contains non-smooth functions {bad_fn}; symmech needs smooth"
+                " expressions"
+            )
+        f.ok = not bad
+
+    def default_parameters(self, problems: _Problems) -> tuple[sp.Symbol, ...]:
+        """Every other free symbol, sorted by name; two symbols sharing a name are refused."""
+        params = sorted(self.candidates, key=atom_key)
+        for a, b in itertools.pairwise(params):
+            if a.name == b.name:
+                problems.add(
+                    f"{self.candidates[b]}: symbol {b} {_assumptions(b)} has the same name as the"
+                    f" symbol {a} {_assumptions(a)} in {self.candidates[a]} but"
+                    f" {_differs(a if isinstance(a, sp.Dummy) else b)}, so sympy treats them as"
+                    " two symbols; use one symbol per name"
+                )
+        return tuple(params)
+
+
+def _names(symbols: Iterable[sp.Basic]) -> list[str]:
+    return sorted(str(s) for s in symbols)
+
+
+# ---------------------------------------------------------------------------------------
+# stage 3: properties
 
 
 def _metric_from_kinetic_energy(
     T: sp.Expr, v: Sequence[sp.Symbol], q: Sequence[sp.Symbol], problems: _Problems
-) -> sp.Matrix:
+) -> sp.Matrix | None:
     """g_ij = d^2 T / dv_i dv_j, checking that T is a quadratic form in the velocities."""
     try:
         return metric_from_kinetic_energy(T, v, q)
@@ -463,146 +836,101 @@ def _metric_from_kinetic_energy(
             f"kinetic_energy: T = {_short(T)} is not a quadratic form in the velocities"
             f" ({_short(exc.term)} {exc})"
         )
-        return sp.zeros(len(v), len(v))
+        return None
 
 
-def _check_metric(G: sp.Matrix, points: list[dict], problems: _Problems) -> None:
+def _check_metric(G: sp.Matrix, label: str, points: _Points, problems: _Problems) -> None:
+    """Symmetric, and positive definite: proven symbolically for a diagonal metric of
+    positive terms, else at sampled points (indefinite at one, or singular at all, refuses)."""
     n = G.rows
+    pts = points.for_(G)
     asym = [
         (i, j)
         for i in range(n)
         for j in range(i + 1, n)
-        if G[i, j] != G[j, i] and not _is_zero(G[i, j] - G[j, i], points)
+        if G[i, j] != G[j, i] and vanishes(G[i, j] - G[j, i], pts) is False
     ]
     if asym:
-        problems.add(f"metric: not symmetric, g[i,j] != g[j,i] at (i,j) in {asym}")
+        problems.add(f"{label}: not symmetric, g[i,j] != g[j,i] at (i,j) in {asym}")
         return
-    # symbolic where cheap: a constant or diagonal metric
-    if all(e.is_number for e in G):
-        _check_numeric_pd(G, [{}], problems)
-        return
-    if all(G[i, j] == 0 for i in range(n) for j in range(n) if i != j):
-        for i in range(n):
-            d = G[i, i]
-            if d == 0 or d.is_zero:
-                problems.add(f"metric: singular, diagonal entry g[{i},{i}] is 0")
-            elif d.is_nonpositive:
-                problems.add(f"metric: not positive definite, g[{i},{i}] = {d} <= 0")
-        if problems.items:
+    diagonal = all(G[i, j] == 0 for i in range(n) for j in range(n) if i != j)
+    try:
+        if diagonal and all(proven_sign(G[i, i]) == "pos" for i in range(n)):
             return
-    _check_numeric_pd(G, points, problems)
-
-
-def _check_numeric_pd(G: sp.Matrix, points: list[dict], problems: _Problems) -> None:
-    singular_at = []
-    for point in points:
-        A = evaluate_matrix(G, point)
-        if np.abs(A.imag).max(initial=0) > 1e-12:
-            problems.add(f"metric: complex entries at the sampled point {_fmt(point)}")
+    except RecursionError:  # an absurdly deep expression: judge it at sampled points
+        pass
+    singular_at, failure = [], None
+    evaluated = 0
+    for point in pts:
+        try:
+            A, complex_ = real_values(G, point)
+        except EvaluationError as exc:
+            failure = failure or (exc, point)
+            continue
+        evaluated += 1
+        if complex_:
+            problems.add(f"{label}: complex entries{_at(point, G)}")
             return
-        A = A.real
-        w = np.linalg.eigvalsh(0.5 * (A + A.T))
-        scale = max(np.abs(w).max(initial=0), 1e-300)
-        if np.abs(w).min() <= 1e-12 * scale:
-            singular_at.append(point)
-        elif w.min() < 0:
-            problems.add(
-                f"metric: not positive definite at the sampled point {_fmt(point)}"
-                f" (eigenvalues {np.round(w, 6).tolist()})"
-            )
+        verdict, evidence = classify_symmetric(A)
+        if verdict == "indefinite":
+            problems.add(f"{label}: not positive definite{_at(point, G)} ({evidence})")
             return
-    if singular_at and len(singular_at) == len(points):
+        if verdict == "singular":
+            singular_at.append((point, evidence))
+    if not evaluated:
+        exc, point = failure
+        i, j = exc.index
         problems.add(
-            f"metric: singular (determinant 0) at every sampled point, e.g. {_fmt(singular_at[0])}"
+            f"{label}: entry [{i},{j}] = {_short(G[i, j])} {exc.reason}{_at(point, G)};"
+            " positive definiteness cannot be checked (rescale the units, or"
+            " write the entry so that it has a finite value)"
+        )
+    elif len(singular_at) == evaluated:
+        point, evidence = singular_at[0]
+        problems.add(
+            f"{label}: singular (determinant identically 0): singular at every sampled point"
+            f"{_at(point, G).replace(' at the sampled point', ', e.g.')} ({evidence})"
         )
 
 
-def _check_frame(S: sp.Matrix, points: list[dict], problems: _Problems) -> None:
-    singular = 0
-    for point in points:
-        A = evaluate_matrix(S, point).real
-        s = np.linalg.svd(A, compute_uv=False)
-        if s.min() <= 1e-12 * max(s.max(), 1e-300):
-            singular += 1
-    if singular == len(points):
+def _generic_rank(M: sp.Matrix, pts: list[dict]) -> tuple[int | None, str]:
+    ranks, reason = [], ""
+    for point in pts:
+        try:
+            ranks.append(rank_at(M, point))
+        except EvaluationError as exc:
+            reason = reason or f"entry {list(exc.index or ())} {exc.reason}{_at(point, M)}"
+    return (max(ranks) if ranks else None), reason
+
+
+def _check_frame(S: sp.Matrix, points: _Points, problems: _Problems) -> None:
+    rank, reason = _generic_rank(S, points.for_(S))
+    if rank is None:
+        problems.add(f"frame: cannot be evaluated at any sampled point ({reason})")
+    elif rank < S.rows:
         problems.add("frame: the matrix S (q_dot = S v) is singular at every sampled point")
 
 
-def _check_independent(
-    rows: sp.Matrix, points: list[dict], label: str, problems: _Problems
-) -> None:
+def _check_independent(rows: sp.Matrix, points: _Points, label: str, problems: _Problems) -> None:
     m = rows.rows
-    ranks = []
-    for point in points:
-        A = evaluate_matrix(rows, point).real
-        ranks.append(np.linalg.matrix_rank(A, tol=1e-10 * max(np.abs(A).max(initial=0), 1e-300)))
-    if max(ranks) < m:
+    rank, reason = _generic_rank(rows, points.for_(rows))
+    if rank is None:
+        problems.add(f"{label}: cannot be evaluated at any sampled point ({reason})")
+    elif rank < m:
         problems.add(
-            f"{label}: the one-forms are linearly dependent (rank {max(ranks)} < {m})"
+            f"{label}: the one-forms are linearly dependent (rank {rank} < {m})"
             " at every sampled point"
         )
 
 
-def _raw_matrix(value: object, field: str) -> list[list[object]]:
-    """Rows of a matrix input, entries untouched (strings are parsed later, never sympified)."""
-    if isinstance(value, sp.MatrixBase):
-        return [list(value.row(i)) for i in range(value.rows)]
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
-        raise SceneError(
-            f"{field}: expected a square matrix (sympy Matrix or nested lists), got {value!r}"
-        )
-    rows = [
-        list(r) if hasattr(r, "__iter__") and not isinstance(r, (str, bytes)) else None
-        for r in value
-    ]
-    if any(r is None for r in rows):
-        raise SceneError(f"{field}: expected a matrix given as a list of rows, got {value!r}")
-    if len({len(r) for r in rows}) > 1:
-        raise SceneError(f"{field}: rows of different lengths {[len(r) for r in rows]}")
-    return rows
-
-
-def _fmt(point: Mapping) -> str:
-    return (
-        "{"
-        + ", ".join(f"{k}={v}" for k, v in sorted(point.items(), key=lambda kv: str(kv[0])))
-        + "}"
-    )
-
-
-def _constraint_row(c, v, field, expr, problems: _Problems) -> list[sp.Expr] | None:
-    """Coefficient row of a constraint given as an expression linear in v or as a row."""
-    n = len(v)
-    if isinstance(c, (list, tuple)) or (isinstance(c, sp.MatrixBase)):
-        entries = list(c)
-        if len(entries) != n:
-            problems.add(f"{field}: a coefficient row needs {n} entries, got {len(entries)}")
-            return None
-        out = [expr(e, f"{field}[{j}]") for j in range(n) for e in [entries[j]]]
-        return None if any(o is None for o in out) else out
-    e = expr(c, field)
-    if e is None:
+def _constraint_row(
+    f: _Field, v: Sequence[sp.Symbol], points: _Points, problems: _Problems
+) -> list[sp.Expr] | None:
+    """Coefficient row mu of a constraint ``mu(q) v`` (see :func:`linear_form_row`)."""
+    if not f.in_velocities:
+        return list(f.value)
+    try:
+        return linear_form_row(f.value, v, points.for_)
+    except NotQuadraticError as exc:
+        problems.add(f"{f.label}: {_short(f.value)} {exc}")
         return None
-    zero = dict.fromkeys(v, 0)
-    row = [sp.diff(e, vj) for vj in v]
-    nonlinear = [str(vj) for vj, r in zip(v, row, strict=True) if r.free_symbols & set(v)]
-    if nonlinear:
-        problems.add(
-            f"{field}: {_short(e)} is not linear in the velocities (nonlinear in {nonlinear});"
-            " constraints must be one-forms mu_i(q) q_dot^i"
-        )
-        return None
-    if all(r == 0 for r in row):
-        problems.add(
-            f"{field}: {_short(e)} does not involve any velocity {list(map(str, v))}; a"
-            " holonomic constraint h(q) = 0 is given by its differential dh (h_dot = 0)"
-        )
-        return None
-    offset = e.subs(zero)
-    if offset != 0 and sp.simplify(offset) != 0:
-        problems.add(
-            f"{field}: {_short(e)} has the velocity-free part {_short(offset)}; constraints must be"
-            " linear (homogeneous) in the velocities"
-        )
-        return None
-    return row
