@@ -49,6 +49,9 @@ __all__ = ["NumericalError", "SceneModule", "load_generated"]
 _STATUS = {1: "a matrix that must be positive definite is not", 2: "an output is not finite"}
 
 Raw = Callable[[tuple[np.ndarray, ...], Any, Any, Any], np.ndarray]
+#: A fast single-state caller: the output, or None when the arguments are not the plain
+#: case it handles (the general path then validates them and explains any problem).
+Fast = Callable[[tuple[object, ...], object], "np.ndarray | None"]
 
 
 class NumericalError(SymmechError, FloatingPointError):
@@ -58,7 +61,13 @@ class NumericalError(SymmechError, FloatingPointError):
 class SceneModule:
     """Generated functions of one scene (see the module docstring)."""
 
-    def __init__(self, code: GeneratedCode, raw: Mapping[str, Raw], path: Path):
+    def __init__(
+        self,
+        code: GeneratedCode,
+        raw: Mapping[str, Raw],
+        path: Path,
+        fast: Mapping[str, Fast] | None = None,
+    ):
         self.code = code
         self.backend = code.target
         self.path = path
@@ -69,6 +78,7 @@ class SceneModule:
         self.inputs = tuple(str(a) for _, a in plan.inputs)
         self.walls = plan.walls
         self._raw = dict(raw)
+        self._fast = dict(fast or {})
         self._spec = {f.name: f for f in code.functions}
         self._by_wall = {(f.kind, f.wall_index): f.name for f in code.functions if f.wall}
 
@@ -140,6 +150,11 @@ class SceneModule:
     # -- the API ----------------------------------------------------------------------------
     def call(self, name: str, *state: object, params=None, t=None, inputs=None) -> np.ndarray:
         """Call the generated function ``name`` with its state arrays (q, v, or y)."""
+        fast = self._fast.get(name)
+        if fast is not None and t is None and inputs is None:
+            out = fast(state, params)
+            if out is not None:
+                return out
         spec = self._spec.get(name)
         sizes = [2 * self.n if s == "y" else self.n for s in (spec.state if spec else ())]
         arrays = [
@@ -271,20 +286,29 @@ def _numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
 
 def _c_raw(
     lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_inputs: int, n_parameters: int
-) -> Raw:
-    single = getattr(lib, prefix + spec.name)
+) -> tuple[Raw, Fast | None]:
+    """The general caller of a generated C function, and (for a function of the state and
+    the parameters only) a fast single-state caller.
+
+    A single state is copied into per-thread float64 buffers whose addresses are taken once,
+    and the function is called through a prototype of plain addresses: no ctypes array
+    conversion and no address lookup per call (``ndarray.ctypes`` costs about a
+    microsecond, as much as a small generated function).
+    """
+    symbol = getattr(lib, prefix + spec.name)
     batch = getattr(lib, prefix + spec.name + "_batch")
     ptr, dbl = ctypes.c_void_p, ctypes.c_double
     nstate = len(spec.state)
-    dbls = ctypes.POINTER(ctypes.c_double)
-    single.argtypes = (
-        [dbls] * nstate
-        + ([dbls] if spec.takes_parameters else [])
-        + ([dbl] if spec.takes_time else [])
-        + ([dbls] if spec.takes_inputs else [])
-        + [dbls]
-    )
-    single.restype = ctypes.c_int
+    single = ctypes.CFUNCTYPE(
+        ctypes.c_int,
+        *(
+            [ptr] * nstate
+            + ([ptr] if spec.takes_parameters else [])
+            + ([dbl] if spec.takes_time else [])
+            + ([ptr] if spec.takes_inputs else [])
+            + [ptr]
+        ),
+    )(ctypes.cast(symbol, ctypes.c_void_p).value)
     batch.argtypes = (
         [ctypes.c_long]
         + [ptr] * nstate
@@ -299,38 +323,80 @@ def _c_raw(
     sizes = [2 * n if s == "y" else n for s in spec.state]
     local = threading.local()
 
-    def buffers() -> tuple[list, list]:
-        """Per-thread ctypes buffers for one state, and numpy views on them (ctypes
-        releases the GIL during the call, so threads must not share them)."""
+    def fast_buffers() -> tuple[list[np.ndarray], list[int]]:
+        """Per-thread buffers of the fast path, in the order of the function's arguments."""
+        arrays = [np.zeros(k) for k in sizes]
+        if spec.takes_parameters:
+            arrays.append(np.zeros(max(n_parameters, 1)))
+        arrays.append(np.zeros(out_shape if out_shape else (1,)))
+        return arrays, [a.ctypes.data for a in arrays]
+
+    def buffers() -> tuple[list[np.ndarray], list[int]]:
+        """Per-thread buffers for one state (state arrays, p, u, out) and their addresses
+        (ctypes releases the GIL during the call, so threads must not share them)."""
         b = getattr(local, "buffers", None)
         if b is None:
-            cbufs = [(ctypes.c_double * k)() for k in sizes]
-            cbufs.append((ctypes.c_double * max(n_parameters, 1))())
-            cbufs.append((ctypes.c_double * max(n_inputs, 1))())
-            cbufs.append((ctypes.c_double * max(out_size, 1))())
-            views = [np.frombuffer(c, dtype=np.float64) for c in cbufs]
-            b = local.buffers = (cbufs, views)
+            arrays = [np.zeros(k) for k in sizes]
+            arrays += [np.zeros(max(n_parameters, 1)), np.zeros(max(n_inputs, 1))]
+            arrays.append(np.zeros(out_shape if out_shape else (1,)))
+            b = local.buffers = (arrays, [a.ctypes.data for a in arrays])
         return b
 
     def call_single(state, p, t, u) -> np.ndarray:
-        cbufs, views = buffers()
+        arrays, addresses = buffers()
         args: list = []
         for i, a in enumerate(state):
-            views[i][:] = a
-            args.append(cbufs[i])
+            arrays[i][:] = a
+            args.append(addresses[i])
         if spec.takes_parameters:
-            views[-3][:] = p
-            args.append(cbufs[-3])
+            arrays[-3][:] = p
+            args.append(addresses[-3])
         if spec.takes_time:
             args.append(float(t))
         if spec.takes_inputs:
-            views[-2][:] = u
-            args.append(cbufs[-2])
-        args.append(cbufs[-1])
+            arrays[-2][:] = u
+            args.append(addresses[-2])
+        args.append(addresses[-1])
         status = single(*args)
         if status:
             raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
-        return views[-1][:out_size].reshape(out_shape).copy()
+        return arrays[-1].reshape(out_shape).copy()
+
+    fast: Fast | None = None
+    if not spec.takes_time and not spec.takes_inputs:
+        # what the fast path accepts: float64 (or int64) vectors of the right length, lists
+        # or tuples of that length; anything else goes the general way
+        checks = [(k, (k,)) for k in sizes]
+        if spec.takes_parameters:
+            checks.append((n_parameters, (n_parameters,)))
+        sequences = (list, tuple)
+        ndarray = np.ndarray
+        dtypes = "dl"
+
+        def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
+            args = (*state, params) if spec.takes_parameters else state
+            if len(args) != len(checks):
+                return None
+            for a, (k, shape) in zip(args, checks, strict=True):
+                kind = type(a)
+                if kind is ndarray:
+                    if a.shape != shape or a.dtype.char not in dtypes:  # type: ignore[union-attr]
+                        return None
+                elif kind not in sequences or len(a) != k:  # type: ignore[arg-type]
+                    return None
+            try:
+                arrays, addresses = local.fast
+            except AttributeError:
+                arrays, addresses = local.fast = fast_buffers()
+            try:
+                for buffer, a in zip(arrays, args, strict=False):
+                    buffer[:] = a
+            except (TypeError, ValueError):
+                return None  # e.g. nested lists: the general path explains
+            status = single(*addresses)
+            if status:
+                raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
+            return arrays[-1].reshape(out_shape).copy()
 
     def call(state, p, t, u):
         if spec.takes_parameters and p.ndim != 1:
@@ -385,7 +451,7 @@ def _c_raw(
             raise _failed(spec.name, i, "failed in the batch call only")
         return out.reshape((*lead, *out_shape))
 
-    return call
+    return call, fast
 
 
 def _import_numpy_module(code: GeneratedCode, folder: Path):
@@ -427,7 +493,9 @@ def load_generated(
     prefix = f"{code.stem}_"
     n_inputs = len(code.plan.inputs)
     n_par = len(code.plan.parameters)
-    raw = {f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs, n_par) for f in code.functions}
-    module = SceneModule(code, raw, library)
+    callers = {f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs, n_par) for f in code.functions}
+    raw = {name: general for name, (general, _) in callers.items()}
+    fast = {name: quick for name, (_, quick) in callers.items() if quick is not None}
+    module = SceneModule(code, raw, library, fast)
     module._library = lib  # keep the library alive as long as the module
     return module

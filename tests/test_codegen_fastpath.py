@@ -1,0 +1,107 @@
+"""The single-state fast path of the loaded C module: the same results as the general path
+(and as the NumPy backend), arguments it does not handle are passed on to the general path
+and refused there with its messages, nothing is broadcast silently, and threads do not
+share its buffers."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+from codegen_support import require_c_compiler
+
+import symmech as sm
+from symmech.codegen import CodegenError
+from symmech.examples import carnot_3_7, pendulum_on_cart
+
+
+@pytest.fixture(scope="module")
+def modules():
+    require_c_compiler()
+    scene = pendulum_on_cart(3)
+    code_c = sm.codegen.generate(scene, "c", strategy="linear_solve")
+    code_np = sm.codegen.generate(scene, "numpy", strategy="linear_solve")
+    return code_c.load(), code_np.load()
+
+
+def _state(mod, seed):
+    rng = np.random.default_rng(seed)
+    return rng.normal(size=mod.n), rng.normal(size=mod.n), 1 + rng.random(len(mod.parameters))
+
+
+def test_fast_path_is_taken_and_agrees_with_the_general_path(modules):
+    c, npm = modules
+    assert "acceleration" in c._fast and "mass_matrix" in c._fast
+    for seed in range(5):
+        q, v, p = _state(c, seed)
+        fast = c.acceleration(q, v, p)
+        general = c.acceleration(q[None, :], v[None, :], p)[0]  # the batch route
+        assert np.array_equal(fast, general)
+        np.testing.assert_allclose(fast, npm.acceleration(q, v, p), rtol=1e-12, atol=1e-12)
+        M = c.mass_matrix(q, p)
+        assert M.shape == (c.n, c.n)
+        assert np.array_equal(M, c.mass_matrix(q[None, :], p)[0])
+        # lists, tuples and a mapping of parameters give the same numbers
+        named = dict(zip(c.parameters, p, strict=True))
+        assert np.array_equal(c.acceleration(list(q), tuple(v), named), fast)
+
+
+def test_fast_path_returns_fresh_arrays(modules):
+    c, _ = modules
+    q, v, p = _state(c, 1)
+    first = c.acceleration(q, v, p)
+    kept = first.copy()
+    c.acceleration(*_state(c, 2))
+    assert np.array_equal(first, kept)  # not a view on a reused buffer
+
+
+@pytest.mark.parametrize(
+    "bad_q",
+    [0.5, [0.5], np.zeros(1), np.zeros((2, 2)), "abc", [[0.0] * 3]],
+    ids=["scalar", "short list", "short array", "matrix", "string", "nested"],
+)
+def test_what_the_fast_path_does_not_take_is_refused_by_the_general_path(modules, bad_q):
+    c, _ = modules
+    _, v, p = _state(c, 3)
+    with pytest.raises((CodegenError, ValueError)):
+        c.acceleration(bad_q, v, p)
+
+
+def test_wrong_parameter_count_is_refused(modules):
+    c, _ = modules
+    q, v, p = _state(c, 4)
+    with pytest.raises(CodegenError, match="params"):
+        c.acceleration(q, v, p[:-1])
+
+
+def test_threads_do_not_share_buffers(modules):
+    c, npm = modules
+    states = [_state(c, 10 + i) for i in range(4)]
+    expected = [npm.acceleration(*s) for s in states]
+    failures: list[str] = []
+
+    def work(i: int) -> None:
+        for _ in range(300):
+            got = c.acceleration(*states[i])
+            if not np.allclose(got, expected[i], rtol=1e-12, atol=1e-12):
+                failures.append(f"thread {i}")
+                return
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert not failures
+
+
+def test_functions_of_time_or_walls_keep_working():
+    """The impact of a wall goes through the fast path too (no t); same map as NumPy."""
+    require_c_compiler()
+    scene = carnot_3_7()
+    c = sm.codegen.generate(scene, "c").load()
+    npm = sm.codegen.generate(scene, "numpy").load()
+    params = {"R": 1.0, "alpha": 0.5, "k": 1.0, "m": 2.0}
+    q, v = [0.0, 1.0, 0.0], [1.0, -2.0, 0.0]
+    np.testing.assert_allclose(c.impact(q, v, params), npm.impact(q, v, params), rtol=1e-14)
