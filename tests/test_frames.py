@@ -119,7 +119,9 @@ def test_rigid_body_euler_equations():
     acc = scene.acceleration()
     assert acc.shape == (3, 1)
     for k in range(3):
-        assert is_zero(acc[k] - expected[k]), k
+        # structurally, after expansion (a canonical form of these rational functions of
+        # I and w): the normal form has eliminated every sin^2 + cos^2
+        assert sp.expand(acc[k]) == sp.expand(expected[k]), k
 
 
 def test_heavy_top_euler_equations_with_gravity_torque():
@@ -149,7 +151,7 @@ def test_body_frame_commutation_coefficients_are_plus_epsilon():
     c = _rigid_body().commutation_coefficients()
     assert c.shape == (3, 3, 3)
     for m, k, l in itertools.product(range(3), repeat=3):
-        assert is_zero(c[m, k, l] - levi_civita(k, l, m)), (m, k, l)
+        assert c[m, k, l] == levi_civita(k, l, m), (m, k, l)  # structurally: 1, -1, 0
 
 
 def test_spatial_frame_commutation_coefficients_are_minus_epsilon():
@@ -160,7 +162,7 @@ def test_spatial_frame_commutation_coefficients_are_minus_epsilon():
     scene = sm.Scene(EULER, metric=sp.eye(3), frame=S_spatial, quasi_velocities=w)
     c = scene.commutation_coefficients()
     for m, k, l in itertools.product(range(3), repeat=3):
-        assert is_zero(c[m, k, l] + levi_civita(k, l, m)), (m, k, l)
+        assert c[m, k, l] == -levi_civita(k, l, m), (m, k, l)  # structurally
 
 
 # ------------------------------------------- connection: torsion free, metric compatible
@@ -523,10 +525,17 @@ def test_double_pendulum_matches_euler_lagrange():
     res = scene.mass_matrix() * sp.Matrix(qdd) - scene.forcing()
     for k in range(2):
         assert is_zero(EL[k] - res[k]), k
-    # and the acceleration solves the Euler-Lagrange equations
+    # and the acceleration solves the Euler-Lagrange equations: exact in sin and cos of
+    # q1 and q2 separately, so the residual is checked at random points to 40 digits
+    # (sympy's simplify does not always recognise sin^2 (q1 - q2) in that form)
     acc = scene.acceleration()
-    for k in range(2):
-        assert is_zero(EL[k].subs(dict(zip(qdd, acc, strict=True)))), k
+    rng = random.Random(11)
+    for _ in range(3):
+        pt = {s: sp.Rational(rng.randint(1, 40), 7) for s in (*qs, *qds, m1, m2, l1, l2, g)}
+        for k in range(2):
+            residual = EL[k].subs(dict(zip(qdd, acc, strict=True))).xreplace(pt)
+            scale = 1 + abs(EL[k].subs({a: 0 for a in qdd}).xreplace(pt).evalf(40))
+            assert abs(residual.evalf(40)) < sp.Float(10, 40) ** -30 * scale, (k, pt)
 
 
 @pytest.mark.parametrize("kind", [1, 2])

@@ -24,10 +24,16 @@ from collections.abc import Sequence
 
 import sympy as sp
 
-from symmech.constraints.projectors import solve_spd
-from symmech.geometry.simplification import Level, tidy_matrix
+from symmech.constraints.projectors import bordered, solve_spd
+from symmech.geometry.field import common_domain
+from symmech.geometry.simplification import Level, check_level, polish
 
-__all__ = ["constrained_acceleration", "constraint_rate", "multipliers"]
+__all__ = [
+    "constrained_acceleration",
+    "constrained_solution",
+    "constraint_rate",
+    "multipliers",
+]
 
 
 def constraint_rate(
@@ -59,15 +65,16 @@ def multipliers(
 ) -> sp.Matrix:
     """lambda = C^{-1} (-mu_dot v - mu M^{-1} f) (see the module docstring).
 
-    With a simplification level the solves run in the fraction field of the entries
+    With a simplification level the solves are exact and in normal form
     (:func:`~symmech.constraints.projectors.solve_spd`), so intermediate results are
-    cancelled as they are formed.
+    cancelled (and trigonometrically reduced) as they are formed.
     """
+    check_level(level, "multipliers", "level")
     Minv = solve_spd(M, mu.T.row_join(f), level)
     m = mu.rows
     C = mu * Minv[:, :m]
     rhs = -rate - mu * Minv[:, m:]
-    return tidy_matrix(solve_spd(C, rhs, level), level)
+    return solve_spd(C, rhs, level)
 
 
 def constrained_acceleration(
@@ -80,3 +87,37 @@ def constrained_acceleration(
     """v_dot = M^{-1} (f + mu^T lambda) (Carnot eq. 5 in the velocity basis)."""
     rhs = f + mu.T * lam if mu.rows else f
     return solve_spd(M, rhs, level)
+
+
+def constrained_solution(
+    M: sp.MatrixBase,
+    f: sp.MatrixBase,
+    mu: sp.MatrixBase,
+    rate: sp.MatrixBase,
+    level: Level = "light",
+) -> tuple[sp.Matrix, sp.Matrix]:
+    """``(v_dot, lambda)`` of ``M v_dot = f + mu^T lambda``, ``mu v_dot = -mu_dot v``.
+
+    With a simplification level: one exact fraction-free solve of the bordered system
+    ``[[M, mu^T], [mu, 0]] [v_dot; -lambda] = [f; -mu_dot v]`` (see
+    :func:`~symmech.constraints.projectors.bordered`; entries cancelled against its
+    determinant, in the Pythagorean normal form of :mod:`symmech.geometry.field`), which
+    avoids inverting the Gram matrix C whose entries already carry ``det M``.  Otherwise,
+    or when that solve declines, :func:`multipliers` and
+    :func:`constrained_acceleration` (the formulas of the module docstring).
+    """
+    check_level(level, "constrained_solution", "level")
+    n, m = M.rows, mu.rows
+    if level != "none" and m:
+        field = common_domain([M, f, mu, rate], trig=True)
+        if field.exact:
+            zero = field.K.zero
+            B = bordered(field.rows(M), field.rows(mu), zero)
+            rhs = field.rows(f) + [[-x] for (x,) in field.rows(rate)]
+            X = field.solve(B, rhs)
+            if X is not None:
+                acc = field.to_matrix(X[:n]).applyfunc(lambda e: polish(e, level))
+                lam = field.to_matrix([[-x] for (x,) in X[n:]])
+                return acc, lam.applyfunc(lambda e: polish(e, level))
+    lam = multipliers(M, f, mu, rate, level) if m else sp.zeros(0, 1)
+    return constrained_acceleration(M, f, mu, lam, level), lam

@@ -15,6 +15,11 @@ nonholonomic basis"; Carnot paper 002, eq. 2):
   on ``c_klm``; with the printed sign the connection would not be torsion-free
   (``omega^m_kl - omega^m_lk`` must equal ``c^m_kl``).  The tests check torsion-freeness
   and metric compatibility, so the Koszul form is used.
+* Simplification: the raised symbols (Christoffel symbols of the second kind, connection
+  coefficients) follow the policy of :func:`_raise_index`: exact normal forms computed
+  fraction-free with one shared determinant and the Pythagorean reduction, symbols
+  formed for i <= j only in coordinates and mirrored; the lowered ones and the forcing
+  are cheap and follow :func:`~symmech.geometry.simplification.simplify_all`.
 * Equations of motion in the velocity basis (Kane / Hamel form, slides "Kane's method of
   quasi-velocities"): ``M v_dot = f`` with
   ``f_k = -omega_kij v^i v^j - u_k(V)``; in coordinates ``omega = Gamma`` and
@@ -30,7 +35,7 @@ import sympy as sp
 
 from symmech.geometry.derivatives import Derivative
 from symmech.geometry.field import field_solve
-from symmech.geometry.simplification import Level, tidy
+from symmech.geometry.simplification import Level, check_level, polish, simplify_all, tidy
 
 __all__ = [
     "christoffel_first_kind",
@@ -62,57 +67,82 @@ def _lowered(
 
 
 def christoffel_first_kind(
-    g: sp.MatrixBase, q: Sequence[sp.Symbol], level: Level = "full"
+    g: sp.MatrixBase, q: Sequence[sp.Symbol], level: Level = "light"
 ) -> sp.ImmutableDenseNDimArray:
     """Gamma_kij = 1/2 (d_i g_jk + d_j g_ik - d_k g_ij) as an Array ``[k, i, j]``.
 
     Slides 000, "Geodesics in coordinates" (the bracketed sum before raising the index).
     Computed for i <= j only and mirrored; derivatives of entries that do not contain a
-    coordinate are never formed.
+    coordinate are never formed.  Simplification: :func:`~symmech.geometry.
+    simplification.simplify_all` (``"light"``: exact normal form with the Pythagorean
+    reduction; ``"full"``: then a bounded ``sympy.simplify``).
     """
+    check_level(level, "christoffel_first_kind")
     D = Derivative(q)
     n = len(q)
+    index = [(k, i, j) for k in range(n) for i in range(n) for j in range(i, n)]
+    values = simplify_all([_lowered(g, D, None, k, i, j) for k, i, j in index], level)
     out = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(n)]
-    for k in range(n):
-        for i in range(n):
-            for j in range(i, n):
-                val = tidy(_lowered(g, D, None, k, i, j), level)
-                out[k][i][j] = out[k][j][i] = val
+    for (k, i, j), val in zip(index, values, strict=True):
+        out[k][i][j] = out[k][j][i] = val
     return sp.ImmutableDenseNDimArray(out)
 
 
-def _raise_index(g: sp.MatrixBase, lowered: list[list[list[sp.Expr]]], level: Level) -> list:
-    """``out[m][i][j] = g^mk lowered[k][i][j]`` (an n x n x n nested list).
+def _raise_index(
+    g: sp.MatrixBase, columns: Sequence[Sequence[sp.Expr]], level: Level
+) -> list[list[sp.Expr]]:
+    """``X = g^{-1} F`` for the columns of F (each a list of n lowered components).
 
-    A diagonal g is divided directly.  Otherwise, with a simplification level, the solve
-    ``g X = F`` runs in the fraction field of the entries (:mod:`symmech.geometry.field`),
-    which returns cancelled fractions directly (a symbolic LU inverse followed by
-    ``cancel`` takes minutes on a 3 x 3 polynomial metric); without one, or when the
-    entries admit no field, a symbolic LU solve is used.
+    Simplification policy of the raised symbols (the "documented policy"; see also
+    :mod:`symmech.geometry.simplification`):
+
+    * ``"none"``: a diagonal g is divided directly, otherwise a symbolic LU solve, as built;
+    * ``"light"`` (default): a diagonal g is divided directly and each entry put in the
+      normal form of :func:`~symmech.geometry.simplification.normal_form`.  Otherwise the
+      exact solve of :func:`symmech.geometry.field.field_solve`, which chooses its route
+      by cost: a fraction-free adjugate and determinant formed once, every minor reduced
+      by ``sin^2 -> 1 - cos^2`` (where both occur), ``X = (adj g) F / det g`` with the
+      determinant shared by all entries and cancelled against each numerator (by a gcd
+      while it has at most 400 terms, else by its monomial and integer content).  When it
+      declines (no exact field, a dense block larger than 8 x 8, or minors over the term
+      budget, as for the pendulum on a cart with 6 or more links) the LU solution is
+      returned with :func:`tidy` applied, which skips large entries, so the cost stays
+      bounded and the result exact;
+    * ``"full"``: ``"light"``, then ``sympy.simplify`` on each entry of at most
+      ``FULL_MAX_OPS`` operations, kept only when it is not longer (:func:`polish`).
     """
     n = g.rows
-    F = sp.Matrix(n, n * n, lambda k, ij: lowered[k][ij // n][ij % n])
+    F = sp.Matrix(n, len(columns), lambda k, c: columns[c][k])
     if g.is_diagonal():
-        X = sp.Matrix(n, n * n, lambda k, ij: F[k, ij] / g[k, k])
-    else:
-        X = field_solve(g, F) if level != "none" else None
-        if X is None:
-            X = g.LUsolve(F)
-    return [[[tidy(X[m, i * n + j], level) for j in range(n)] for i in range(n)] for m in range(n)]
+        return [simplify_all([col[k] / g[k, k] for k in range(n)], level) for col in columns]
+    X = field_solve(g, F) if level != "none" else None
+    if X is None:
+        X = g.LUsolve(F)
+        return [[tidy(X[k, c], level) for k in range(n)] for c in range(F.cols)]
+    return [[polish(X[k, c], level) for k in range(n)] for c in range(F.cols)]
 
 
 def christoffel_second_kind(
-    g: sp.MatrixBase, q: Sequence[sp.Symbol], level: Level = "full"
+    g: sp.MatrixBase, q: Sequence[sp.Symbol], level: Level = "light"
 ) -> sp.ImmutableDenseNDimArray:
     """Gamma^k_ij = g^kl Gamma_lij as an Array ``[k, i, j]`` (slides 000, Christoffel symbol).
 
-    Needs the symbolic inverse of g; meant for systems of moderate size.  For the equations
-    of motion of large systems use :func:`forcing` (first kind, no inverse).
+    Formed for i <= j only (``Gamma^k_ij = Gamma^k_ji``) and mirrored: one solve
+    ``g X = F`` with the n (n + 1) / 2 columns ``F_(ij) = Gamma_.ij``.  Simplification
+    policy: :func:`_raise_index`.  For the equations of motion of large systems use
+    :func:`forcing` (first kind, no inverse).
     """
+    check_level(level, "christoffel_second_kind")
     n = len(q)
     first = christoffel_first_kind(g, q, level="none")
-    lowered = [[[first[k, i, j] for j in range(n)] for i in range(n)] for k in range(n)]
-    return sp.ImmutableDenseNDimArray(_raise_index(sp.Matrix(g), lowered, level))
+    pairs = [(i, j) for i in range(n) for j in range(i, n)]
+    cols = [[first[k, i, j] for k in range(n)] for i, j in pairs]
+    raised = _raise_index(sp.Matrix(g), cols, level)
+    out = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(n)]
+    for (i, j), col in zip(pairs, raised, strict=True):
+        for k in range(n):
+            out[k][i][j] = out[k][j][i] = col[k]
+    return sp.ImmutableDenseNDimArray(out)
 
 
 def connection_first_kind(
@@ -120,22 +150,20 @@ def connection_first_kind(
     q: Sequence[sp.Symbol],
     frame: sp.MatrixBase | None,
     commutation: sp.Array | None,
-    level: Level = "full",
+    level: Level = "light",
 ) -> sp.ImmutableDenseNDimArray:
     """omega_kij = g(nabla_{u_i} u_j, u_k) as an Array ``[k, i, j]`` (Koszul formula).
 
     ``G`` is the metric in the frame, ``frame`` the matrix S whose columns are the u_i in
     coordinates q (None: coordinate frame) and ``commutation[m, k, l] = c^m_kl``.
     """
+    check_level(level, "connection_first_kind")
     n = len(q)
     D = Derivative(q, frame)
     c = None if frame is None else commutation
-    return sp.ImmutableDenseNDimArray(
-        [
-            [[tidy(_lowered(G, D, c, k, i, j), level) for j in range(n)] for i in range(n)]
-            for k in range(n)
-        ]
-    )
+    index = [(k, i, j) for k in range(n) for i in range(n) for j in range(n)]
+    values = simplify_all([_lowered(G, D, c, k, i, j) for k, i, j in index], level)
+    return sp.ImmutableDenseNDimArray(values, (n, n, n))
 
 
 def connection_coefficients(
@@ -143,17 +171,25 @@ def connection_coefficients(
     q: Sequence[sp.Symbol],
     frame: sp.MatrixBase | None,
     commutation: sp.Array | None,
-    level: Level = "full",
+    level: Level = "light",
 ) -> sp.ImmutableDenseNDimArray:
     """omega^m_ij with ``nabla_{u_i} u_j = omega^m_ij u_m``, an Array ``[m, i, j]``.
 
     Slides 000, "Connection coefficients in a nonholonomic basis" (sign of the c_klm term
     re-derived, see the module docstring).  Equals Gamma^m_ij in a coordinate frame.
     """
+    check_level(level, "connection_coefficients")
+    if frame is None:
+        return christoffel_second_kind(G, q, level)
     n = len(q)
     low = connection_first_kind(G, q, frame, commutation, level="none")
-    lowered = [[[low[k, i, j] for j in range(n)] for i in range(n)] for k in range(n)]
-    return sp.ImmutableDenseNDimArray(_raise_index(sp.Matrix(G), lowered, level))
+    pairs = [(i, j) for i in range(n) for j in range(n)]
+    raised = _raise_index(sp.Matrix(G), [[low[k, i, j] for k in range(n)] for i, j in pairs], level)
+    out = [[[sp.S.Zero] * n for _ in range(n)] for _ in range(n)]
+    for (i, j), col in zip(pairs, raised, strict=True):
+        for k in range(n):
+            out[k][i][j] = col[k]
+    return sp.ImmutableDenseNDimArray(out)
 
 
 def forcing(
@@ -172,6 +208,7 @@ def forcing(
     symmetric in (i, j) contributes; it is formed for i <= j, with zero metric derivatives
     skipped, so the cost grows with the number of non-zero terms, not n^3.
     """
+    check_level(level, "forcing")
     n = len(q)
     D = Derivative(q, frame)
     if frame is None:

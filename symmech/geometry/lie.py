@@ -40,7 +40,8 @@ from sympy.polys.matrices import DomainMatrix
 
 from symmech.declaration.sampling import sample_points
 from symmech.errors import SceneError
-from symmech.geometry.simplification import Level, tidy
+from symmech.geometry.field import common_domain
+from symmech.geometry.simplification import Level, check_level, normal_form, polish, tidy
 
 __all__ = [
     "GENERIC_RANK_POLICY",
@@ -245,13 +246,16 @@ def _bracket(
 
 
 def _tidy_entry(e: sp.Expr, level: Level) -> sp.Expr:
-    """Simplify one component: polynomials are expanded (a canonical form), else ``tidy``."""
+    """Simplify one component: polynomials are expanded (a canonical form), other
+    expressions get the exact normal form with the Pythagorean reduction
+    (:func:`~symmech.geometry.simplification.normal_form`, bounded in size), then
+    :func:`~symmech.geometry.simplification.polish` at ``"full"``."""
     if level == "none":
         return e
     e = sp.expand(e)
     if e.is_polynomial():
         return e
-    return tidy(e, level)
+    return polish(normal_form(e), level)
 
 
 def _tidy_col(Z: sp.MatrixBase, level: Level) -> sp.ImmutableMatrix:
@@ -281,19 +285,23 @@ def lie_bracket(X: Field, Y: Field, q: Any, *, simplify: Level = "light") -> sp.
         X, Y: n x 1 Matrix or sequence of n expressions (``q`` a sequence of n symbols),
             or r x c Matrices (``q`` an r x c Matrix of symbols).
         q: the coordinates.
-        simplify: fields polynomial in ``q`` are bracketed with sparse polynomial
-            arithmetic and returned expanded (a canonical form) whatever the level.
-            Otherwise ``"none"`` returns the raw sum, and other levels expand each
-            component, keep it if it is then a polynomial, else pass it to ``tidy`` of
-            :mod:`symmech.geometry.simplification` at this level.
+        simplify: ``"none"``, ``"light"`` or ``"full"``.  Fields polynomial in ``q`` are
+            bracketed with sparse polynomial arithmetic and returned expanded (a
+            canonical form) whatever the level.  Otherwise ``"none"`` returns the raw
+            sum, and other levels expand each component, keep it if it is then a
+            polynomial, else put it in the exact normal form of
+            :func:`symmech.geometry.simplification.normal_form` (``sin^2 -> 1 - cos^2``
+            where both occur; ``"full"`` then tries a bounded ``sympy.simplify``).
 
     Returns:
         ``[X, Y]`` as an n x 1 Matrix, or an r x c Matrix for matrix-valued fields.
 
     Raises:
         SceneError: naming the argument, when shapes do not match ``q``, a component is
-            not a sympy expression, or ``q`` is not a sequence/matrix of distinct Symbols.
+            not a sympy expression, ``q`` is not a sequence/matrix of distinct Symbols, or
+            ``simplify`` is not a level.
     """
+    check_level(simplify, "lie_bracket")
     cs = _coords(q, "lie_bracket")
     Xf = _field(X, cs, "X", "lie_bracket")
     Yf = _field(Y, cs, "Y", "lie_bracket")
@@ -674,12 +682,15 @@ def commutation_coefficients(
     (``c^._kl = S^{-1} [u_k, u_l]``, by LU; the bracket as in :func:`lie_bracket`).
     ``c^m_kl = -c^m_lk`` is built in (only k < l is solved).
 
-    Simplification policy: when S and the brackets have rational-function entries the
-    solve is exact over the fraction field and the coefficients come out canonical
-    (cancelled, expanded); otherwise each coefficient is expanded and passed through
-    :func:`symmech.geometry.simplification.tidy` at level ``simplify`` (default ``"light"``:
-    ``cancel`` + ``factor_terms``, bounded in size; no trigonometric simplification;
-    ``"none"`` keeps the raw LU solution).
+    Simplification policy: with a level other than ``"none"`` the solve is exact, by
+    :meth:`symmech.geometry.field.RationalField.solve` over the field of the entries of S
+    and the brackets with the Pythagorean reduction (``sin^2 -> 1 - cos^2`` wherever
+    both occur), so the coefficients are cancelled fractions with reduced numerators and
+    denominators (the rigid body's ``sin^2 psi + cos^2 psi`` comes out as 1), then a
+    bounded ``sympy.simplify`` at ``"full"``.  When no exact field exists or the solve
+    declines, the LU solution is expanded and put in the bounded normal form of
+    :func:`symmech.geometry.simplification.normal_form`; ``"none"`` keeps the raw LU
+    solution.
 
     Returns:
         Array of shape (n, n, n) with ``c[m, k, l] = c^m_kl``.
@@ -689,6 +700,7 @@ def commutation_coefficients(
             entries, or is degenerate (generic rank < n).
     """
     where = "commutation_coefficients"
+    check_level(simplify, where)
     cs = _coords(q, where)
     if cs.shape is not None:
         raise SceneError(f"{where}: q must be a sequence of coordinate symbols, not a matrix")
@@ -717,27 +729,30 @@ def commutation_coefficients(
     if not pairs:
         return sp.ImmutableDenseNDimArray(c)
     try:
-        sol, canonical = _lu_solve(Sm, sp.Matrix.hstack(*rhs))
+        sol, canonical = _lu_solve(Sm, sp.Matrix.hstack(*rhs), simplify)
     except (ValueError, ZeroDivisionError) as exc:
         raise SceneError(f"{where}: cannot solve S c = [u_k, u_l]: {exc}") from exc
     for p, (k, l) in enumerate(pairs):
         for m in range(n):
-            v = sol[m, p] if canonical else _tidy_entry(sol[m, p], simplify)
+            v = polish(sol[m, p], simplify) if canonical else _tidy_entry(sol[m, p], simplify)
             c[m, k, l] = v
             c[m, l, k] = -v
     return sp.ImmutableDenseNDimArray(c)
 
 
-def _lu_solve(S: sp.Matrix, B: sp.Matrix) -> tuple[sp.Matrix, bool]:
-    """Solve ``S C = B`` by LU; the flag tells whether the solution is already canonical.
+def _lu_solve(S: sp.Matrix, B: sp.Matrix, level: Level) -> tuple[sp.Matrix, bool]:
+    """Solve ``S C = B``; the flag tells whether the solution is in normal form.
 
-    Rational-function entries: exact LU over the fraction field (DomainMatrix), whose
-    entries come out cancelled and expanded (canonical).  Other entries (trigonometric, ...):
-    ``Matrix.LUsolve`` with sympy's zero testing, to be simplified by the caller.
+    With a level other than ``"none"``: the exact solve in the field of the entries with
+    the Pythagorean reduction (every entry a cancelled fraction of reduced polynomials in
+    the parameters, coordinates, sin and cos; :mod:`symmech.geometry.field`).  Otherwise,
+    or when no exact field exists or the solve declines: ``Matrix.LUsolve`` with sympy's
+    zero testing, to be simplified by the caller.
     """
-    n = S.rows
-    dM = DomainMatrix.from_Matrix(sp.Matrix.hstack(S, B))
-    if dM.domain.is_EX:
-        return S.LUsolve(B), False
-    dM = dM.to_field()
-    return dM[:, :n].lu_solve(dM[:, n:]).to_Matrix(), True
+    if level != "none":
+        field = common_domain([S, B], trig=True)
+        if field.exact:
+            X = field.solve(field.rows(S), field.rows(B))
+            if X is not None:
+                return field.to_matrix(X), True
+    return S.LUsolve(B), False

@@ -218,56 +218,27 @@ long symmech_carnot_4_4_mass_matrix_batch(long count, const double *q, const dou
 /*
  * forcing: forcing f(q, v, t) of the unconstrained equations g v_dot = f
  *   f_k = -Gamma_kij v^i v^j - dV/dq^k (first kind, no inverse)
- * Operations after CSE: 94 (sympy.count_ops); temporaries: 25.
+ * Operations after CSE: 0 (sympy.count_ops); temporaries: 0.
  * Output: 6 doubles.
  */
-int symmech_carnot_4_4_forcing(const double *q, const double *v, const double *p, double *out)
+int symmech_carnot_4_4_forcing(const double *q, const double *v, double *out)
 {
-    const double q_theta = q[4];
-    const double q_psi = q[5];
-    const double v_omega_x = v[3];
-    const double v_omega_y = v[4];
-    const double v_omega_z = v[5];
-    const double p_k = p[1];
-    const double tmp0 = (p_k*p_k);
-    const double tmp1 = sin(q_psi);
-    const double tmp2 = (tmp1*tmp1);
-    const double tmp3 = cos(q_psi);
-    const double tmp4 = (tmp3*tmp3);
-    const double tmp5 = tmp2 + tmp4;
-    const double tmp6 = (1.0/tmp5);
-    const double tmp7 = tan(q_theta);
-    const double tmp8 = (1.0/tmp7);
-    const double tmp9 = tmp2*tmp8;
-    const double tmp10 = tmp4*tmp8;
-    const double tmp11 = (1.0/sin(q_theta));
-    const double tmp12 = cos(q_theta);
-    const double tmp13 = tmp11*tmp12;
-    const double tmp14 = tmp0*tmp3*tmp6*(tmp10 - tmp13*tmp2 - tmp13*tmp4 + tmp9);
-    const double tmp15 = (1.0/(tmp7*tmp7));
-    const double tmp16 = -tmp10*tmp13 - tmp13*tmp9 + tmp15*tmp2 + tmp15*tmp4 + tmp5;
-    const double tmp17 = tmp0*tmp16;
-    const double tmp18 = (1.0/tmp1);
-    const double tmp19 = ((tmp3*tmp3)*(tmp3*tmp3));
-    const double tmp20 = -tmp1*tmp11*tmp12 + tmp1*tmp13*tmp4*tmp6 - tmp1*tmp4*tmp6*tmp8 + tmp1*tmp8 + tmp10*tmp18 - tmp11*tmp12*tmp18*tmp4 + tmp13*tmp18*tmp19*tmp6 - tmp18*tmp19*tmp6*tmp8;
-    const double tmp21 = -tmp20;
-    const double tmp22 = (0.5)*tmp0;
-    const double tmp23 = v_omega_x*v_omega_y;
-    const double tmp24 = -tmp0*tmp16;
+    (void)q;
+    (void)v;
     out[0] = 0.0;
     out[1] = 0.0;
     out[2] = 0.0;
-    out[3] = -(v_omega_y*v_omega_y)*tmp14 - v_omega_y*v_omega_z*(tmp0 - tmp17) - tmp23*(-tmp20*tmp22 + tmp21*tmp22);
-    out[4] = (v_omega_x*v_omega_x)*tmp0*tmp21 - v_omega_x*v_omega_z*(-tmp0 - tmp24) + tmp14*tmp23;
-    out[5] = -tmp23*((0.5)*tmp17 + (0.5)*tmp24);
+    out[3] = 0.0;
+    out[4] = 0.0;
+    out[5] = 0.0;
     return sm_check_finite(6, out);
 }
 
-long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double *v, const double *p, double *out)
+long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double *v, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_forcing(q + i*6, v + i*6, p, out + i*6);
+        int status = symmech_carnot_4_4_forcing(q + i*6, v + i*6, out + i*6);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -275,44 +246,17 @@ long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double 
 /*
  * acceleration: acceleration v_dot, constrained system solved in the code
  *   g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)
- * Operations after CSE: 95 (sympy.count_ops); temporaries: 25; solve: 239 flops (n = 6, m = 3, diagonal metric).
+ * Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 239 flops (n = 6, m = 3, diagonal metric).
  * Then Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f), out = M^-1 (f + mu^T lambda).
  * Output: 6 doubles.
  */
 int symmech_carnot_4_4_acceleration(const double *q, const double *v, const double *p, double *out)
 {
-    const double q_theta = q[4];
-    const double q_psi = q[5];
-    const double v_omega_x = v[3];
-    const double v_omega_y = v[4];
-    const double v_omega_z = v[5];
+    (void)q;
+    (void)v;
     const double p_k = p[1];
     const double p_r = p[2];
     const double tmp0 = (p_k*p_k);
-    const double tmp1 = sin(q_psi);
-    const double tmp2 = (tmp1*tmp1);
-    const double tmp3 = cos(q_psi);
-    const double tmp4 = (tmp3*tmp3);
-    const double tmp5 = tmp2 + tmp4;
-    const double tmp6 = (1.0/tmp5);
-    const double tmp7 = tan(q_theta);
-    const double tmp8 = (1.0/tmp7);
-    const double tmp9 = tmp2*tmp8;
-    const double tmp10 = tmp4*tmp8;
-    const double tmp11 = (1.0/sin(q_theta));
-    const double tmp12 = cos(q_theta);
-    const double tmp13 = tmp11*tmp12;
-    const double tmp14 = tmp0*tmp3*tmp6*(tmp10 - tmp13*tmp2 - tmp13*tmp4 + tmp9);
-    const double tmp15 = (1.0/(tmp7*tmp7));
-    const double tmp16 = -tmp10*tmp13 - tmp13*tmp9 + tmp15*tmp2 + tmp15*tmp4 + tmp5;
-    const double tmp17 = tmp0*tmp16;
-    const double tmp18 = (1.0/tmp1);
-    const double tmp19 = ((tmp3*tmp3)*(tmp3*tmp3));
-    const double tmp20 = -tmp1*tmp11*tmp12 + tmp1*tmp13*tmp4*tmp6 - tmp1*tmp4*tmp6*tmp8 + tmp1*tmp8 + tmp10*tmp18 - tmp11*tmp12*tmp18*tmp4 + tmp13*tmp18*tmp19*tmp6 - tmp18*tmp19*tmp6*tmp8;
-    const double tmp21 = -tmp20;
-    const double tmp22 = (0.5)*tmp0;
-    const double tmp23 = v_omega_x*v_omega_y;
-    const double tmp24 = -tmp0*tmp16;
     double M[36];
     double f[6];
     double mu[18];
@@ -356,9 +300,9 @@ int symmech_carnot_4_4_acceleration(const double *q, const double *v, const doub
     f[0] = 0.0;
     f[1] = 0.0;
     f[2] = 0.0;
-    f[3] = -(v_omega_y*v_omega_y)*tmp14 - v_omega_y*v_omega_z*(tmp0 - tmp17) - tmp23*(-tmp20*tmp22 + tmp21*tmp22);
-    f[4] = (v_omega_x*v_omega_x)*tmp0*tmp21 - v_omega_x*v_omega_z*(-tmp0 - tmp24) + tmp14*tmp23;
-    f[5] = -tmp23*((0.5)*tmp17 + (0.5)*tmp24);
+    f[3] = 0.0;
+    f[4] = 0.0;
+    f[5] = 0.0;
     mu[0] = 1.0;
     mu[1] = 0.0;
     mu[2] = 0.0;
@@ -400,7 +344,7 @@ long symmech_carnot_4_4_acceleration_batch(long count, const double *q, const do
 /*
  * rhs: first-order system y = (q, v): y_dot = (q_dot, v_dot)
  *   q_dot = S(q) v, v_dot = acceleration(q, v)
- * Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 95 operations + 239 flops.
+ * Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 2 operations + 239 flops.
  * Then out[6:] = acceleration(q, v).
  * Output: 12 doubles.
  */
@@ -475,44 +419,17 @@ long symmech_carnot_4_4_energy_batch(long count, const double *q, const double *
 /*
  * multipliers: Lagrange multipliers lambda, solved in the code
  *   lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)
- * Operations after CSE: 95 (sympy.count_ops); temporaries: 25; solve: 203 flops (n = 6, m = 3, diagonal metric).
+ * Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 203 flops (n = 6, m = 3, diagonal metric).
  * Then Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f).
  * Output: 3 doubles.
  */
 int symmech_carnot_4_4_multipliers(const double *q, const double *v, const double *p, double *out)
 {
-    const double q_theta = q[4];
-    const double q_psi = q[5];
-    const double v_omega_x = v[3];
-    const double v_omega_y = v[4];
-    const double v_omega_z = v[5];
+    (void)q;
+    (void)v;
     const double p_k = p[1];
     const double p_r = p[2];
     const double tmp0 = (p_k*p_k);
-    const double tmp1 = sin(q_psi);
-    const double tmp2 = (tmp1*tmp1);
-    const double tmp3 = cos(q_psi);
-    const double tmp4 = (tmp3*tmp3);
-    const double tmp5 = tmp2 + tmp4;
-    const double tmp6 = (1.0/tmp5);
-    const double tmp7 = tan(q_theta);
-    const double tmp8 = (1.0/tmp7);
-    const double tmp9 = tmp2*tmp8;
-    const double tmp10 = tmp4*tmp8;
-    const double tmp11 = (1.0/sin(q_theta));
-    const double tmp12 = cos(q_theta);
-    const double tmp13 = tmp11*tmp12;
-    const double tmp14 = tmp0*tmp3*tmp6*(tmp10 - tmp13*tmp2 - tmp13*tmp4 + tmp9);
-    const double tmp15 = (1.0/(tmp7*tmp7));
-    const double tmp16 = -tmp10*tmp13 - tmp13*tmp9 + tmp15*tmp2 + tmp15*tmp4 + tmp5;
-    const double tmp17 = tmp0*tmp16;
-    const double tmp18 = (1.0/tmp1);
-    const double tmp19 = ((tmp3*tmp3)*(tmp3*tmp3));
-    const double tmp20 = -tmp1*tmp11*tmp12 + tmp1*tmp13*tmp4*tmp6 - tmp1*tmp4*tmp6*tmp8 + tmp1*tmp8 + tmp10*tmp18 - tmp11*tmp12*tmp18*tmp4 + tmp13*tmp18*tmp19*tmp6 - tmp18*tmp19*tmp6*tmp8;
-    const double tmp21 = -tmp20;
-    const double tmp22 = (0.5)*tmp0;
-    const double tmp23 = v_omega_x*v_omega_y;
-    const double tmp24 = -tmp0*tmp16;
     double M[36];
     double f[6];
     double mu[18];
@@ -556,9 +473,9 @@ int symmech_carnot_4_4_multipliers(const double *q, const double *v, const doubl
     f[0] = 0.0;
     f[1] = 0.0;
     f[2] = 0.0;
-    f[3] = -(v_omega_y*v_omega_y)*tmp14 - v_omega_y*v_omega_z*(tmp0 - tmp17) - tmp23*(-tmp20*tmp22 + tmp21*tmp22);
-    f[4] = (v_omega_x*v_omega_x)*tmp0*tmp21 - v_omega_x*v_omega_z*(-tmp0 - tmp24) + tmp14*tmp23;
-    f[5] = -tmp23*((0.5)*tmp17 + (0.5)*tmp24);
+    f[3] = 0.0;
+    f[4] = 0.0;
+    f[5] = 0.0;
     mu[0] = 1.0;
     mu[1] = 0.0;
     mu[2] = 0.0;

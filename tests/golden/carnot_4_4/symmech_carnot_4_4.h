@@ -18,13 +18,13 @@
  * `count` rows; p is shared) and returns 0, or 1 + the index of the first failing state.
  *
  * Left out of this file:
- *   - forcing: 119 of the 126 connection coefficients omega_k(ij) (symmetrised in i, j) are identically zero and are never computed
- *   - forcing: entries [0, 1, 2] are identically zero (no velocity or potential term); they are stored as 0.0 without computation
+ *   - forcing: 126 of the 126 connection coefficients omega_k(ij) (symmetrised in i, j) are identically zero and are never computed
+ *   - forcing: entries [0, 1, 2, 3, 4, 5] are identically zero (no velocity or potential term); they are stored as 0.0 without computation
  *   - potential terms: V = 0
  *   - time argument t: nothing depends on t
- *   - parameter argument p left out of psi_rough_wall, dpsi_rough_wall, psit_rough_wall: they do not read it
+ *   - parameter argument p left out of forcing, psi_rough_wall, dpsi_rough_wall, psit_rough_wall: they do not read it
  *   - input argument u left out of mass_matrix, forcing, acceleration, rhs, energy, multipliers, constraint_residual, dpsi_rough_wall: they do not read it
- *   - state arrays taken but not read (they fix the batch shape): mass_matrix (q), energy (q), constraint_residual (q), dpsi_rough_wall (q), psit_rough_wall (q), impact_rough_wall (q)
+ *   - state arrays taken but not read (they fix the batch shape): mass_matrix (q), forcing (q, v), acceleration (q, v), energy (q), multipliers (q, v), constraint_residual (q), dpsi_rough_wall (q), psit_rough_wall (q), impact_rough_wall (q)
  */
 #ifndef SYMMECH_CARNOT_4_4_H
 #define SYMMECH_CARNOT_4_4_H
@@ -45,8 +45,8 @@ extern "C" {
 
 int symmech_carnot_4_4_mass_matrix(const double *q, const double *p, double *out);
 long symmech_carnot_4_4_mass_matrix_batch(long count, const double *q, const double *p, double *out);
-int symmech_carnot_4_4_forcing(const double *q, const double *v, const double *p, double *out);
-long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double *v, const double *p, double *out);
+int symmech_carnot_4_4_forcing(const double *q, const double *v, double *out);
+long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double *v, double *out);
 int symmech_carnot_4_4_acceleration(const double *q, const double *v, const double *p, double *out);
 long symmech_carnot_4_4_acceleration_batch(long count, const double *q, const double *v, const double *p, double *out);
 int symmech_carnot_4_4_rhs(const double *y, const double *p, double *out);

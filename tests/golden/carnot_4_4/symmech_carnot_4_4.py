@@ -12,13 +12,13 @@ the result has shape (...) + the output shape.
   u: f(t), Derivative(f(t), t) (functions of time)
 
 Left out of this file:
-  - forcing: 119 of the 126 connection coefficients omega_k(ij) (symmetrised in i, j) are identically zero and are never computed
-  - forcing: entries [0, 1, 2] are identically zero (no velocity or potential term); they are stored as 0.0 without computation
+  - forcing: 126 of the 126 connection coefficients omega_k(ij) (symmetrised in i, j) are identically zero and are never computed
+  - forcing: entries [0, 1, 2, 3, 4, 5] are identically zero (no velocity or potential term); they are stored as 0.0 without computation
   - potential terms: V = 0
   - time argument t: nothing depends on t
-  - parameter argument p left out of psi_rough_wall, dpsi_rough_wall, psit_rough_wall: they do not read it
+  - parameter argument p left out of forcing, psi_rough_wall, dpsi_rough_wall, psit_rough_wall: they do not read it
   - input argument u left out of mass_matrix, forcing, acceleration, rhs, energy, multipliers, constraint_residual, dpsi_rough_wall: they do not read it
-  - state arrays taken but not read (they fix the batch shape): mass_matrix (q), energy (q), constraint_residual (q), dpsi_rough_wall (q), psit_rough_wall (q), impact_rough_wall (q)
+  - state arrays taken but not read (they fix the batch shape): mass_matrix (q), forcing (q, v), acceleration (q, v), energy (q), multipliers (q, v), constraint_residual (q), dpsi_rough_wall (q), psit_rough_wall (q), impact_rough_wall (q)
 """
 
 import numpy
@@ -190,54 +190,23 @@ def mass_matrix(q, p):
     return out
 
 
-def forcing(q, v, p):
+def forcing(q, v):
     """forcing f(q, v, t) of the unconstrained equations g v_dot = f.
 
     f_k = -Gamma_kij v^i v^j - dV/dq^k (first kind, no inverse)
-    Operations after CSE: 94 (sympy.count_ops); temporaries: 25.
-    Arguments: q, v, p.  Output shape: (...) + (6,).
+    Operations after CSE: 0 (sympy.count_ops); temporaries: 0.
+    Arguments: q, v.  Output shape: (...) + (6,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
     v = numpy.asarray(v, dtype=numpy.float64)
-    shape = _batch_shape((q, 1), (v, 1), (p, 1))
-    q_theta = q[..., 4]
-    q_psi = q[..., 5]
-    v_omega_x = v[..., 3]
-    v_omega_y = v[..., 4]
-    v_omega_z = v[..., 5]
-    p_k = p[..., 1]
-    tmp0 = (p_k*p_k)
-    tmp1 = numpy.sin(q_psi)
-    tmp2 = (tmp1*tmp1)
-    tmp3 = numpy.cos(q_psi)
-    tmp4 = (tmp3*tmp3)
-    tmp5 = tmp2 + tmp4
-    tmp6 = (1.0/tmp5)
-    tmp7 = numpy.tan(q_theta)
-    tmp8 = (1.0/tmp7)
-    tmp9 = tmp2*tmp8
-    tmp10 = tmp4*tmp8
-    tmp11 = (1.0/numpy.sin(q_theta))
-    tmp12 = numpy.cos(q_theta)
-    tmp13 = tmp11*tmp12
-    tmp14 = tmp0*tmp3*tmp6*(tmp10 - tmp13*tmp2 - tmp13*tmp4 + tmp9)
-    tmp15 = (1.0/(tmp7*tmp7))
-    tmp16 = -tmp10*tmp13 - tmp13*tmp9 + tmp15*tmp2 + tmp15*tmp4 + tmp5
-    tmp17 = tmp0*tmp16
-    tmp18 = (1.0/tmp1)
-    tmp19 = ((tmp3*tmp3)*(tmp3*tmp3))
-    tmp20 = -tmp1*tmp11*tmp12 + tmp1*tmp13*tmp4*tmp6 - tmp1*tmp4*tmp6*tmp8 + tmp1*tmp8 + tmp10*tmp18 - tmp11*tmp12*tmp18*tmp4 + tmp13*tmp18*tmp19*tmp6 - tmp18*tmp19*tmp6*tmp8
-    tmp21 = -tmp20
-    tmp22 = (0.5)*tmp0
-    tmp23 = v_omega_x*v_omega_y
-    tmp24 = -tmp0*tmp16
+    shape = _batch_shape((q, 1), (v, 1))
     out = numpy.empty(shape + (6,))
     out[..., 0] = 0.0
     out[..., 1] = 0.0
     out[..., 2] = 0.0
-    out[..., 3] = -(v_omega_y*v_omega_y)*tmp14 - v_omega_y*v_omega_z*(tmp0 - tmp17) - tmp23*(-tmp20*tmp22 + tmp21*tmp22)
-    out[..., 4] = (v_omega_x*v_omega_x)*tmp0*tmp21 - v_omega_x*v_omega_z*(-tmp0 - tmp24) + tmp14*tmp23
-    out[..., 5] = -tmp23*((0.5)*tmp17 + (0.5)*tmp24)
+    out[..., 3] = 0.0
+    out[..., 4] = 0.0
+    out[..., 5] = 0.0
     return out
 
 
@@ -245,45 +214,16 @@ def acceleration(q, v, p):
     """acceleration v_dot, constrained system solved in the code.
 
     g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)
-    Operations after CSE: 95 (sympy.count_ops); temporaries: 25; solve: 239 flops (n = 6, m = 3, diagonal metric).
+    Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 239 flops (n = 6, m = 3, diagonal metric).
     Then Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f), out = M^-1 (f + mu^T lambda).
     Arguments: q, v, p.  Output shape: (...) + (6,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
     v = numpy.asarray(v, dtype=numpy.float64)
     shape = _batch_shape((q, 1), (v, 1), (p, 1))
-    q_theta = q[..., 4]
-    q_psi = q[..., 5]
-    v_omega_x = v[..., 3]
-    v_omega_y = v[..., 4]
-    v_omega_z = v[..., 5]
     p_k = p[..., 1]
     p_r = p[..., 2]
     tmp0 = (p_k*p_k)
-    tmp1 = numpy.sin(q_psi)
-    tmp2 = (tmp1*tmp1)
-    tmp3 = numpy.cos(q_psi)
-    tmp4 = (tmp3*tmp3)
-    tmp5 = tmp2 + tmp4
-    tmp6 = (1.0/tmp5)
-    tmp7 = numpy.tan(q_theta)
-    tmp8 = (1.0/tmp7)
-    tmp9 = tmp2*tmp8
-    tmp10 = tmp4*tmp8
-    tmp11 = (1.0/numpy.sin(q_theta))
-    tmp12 = numpy.cos(q_theta)
-    tmp13 = tmp11*tmp12
-    tmp14 = tmp0*tmp3*tmp6*(tmp10 - tmp13*tmp2 - tmp13*tmp4 + tmp9)
-    tmp15 = (1.0/(tmp7*tmp7))
-    tmp16 = -tmp10*tmp13 - tmp13*tmp9 + tmp15*tmp2 + tmp15*tmp4 + tmp5
-    tmp17 = tmp0*tmp16
-    tmp18 = (1.0/tmp1)
-    tmp19 = ((tmp3*tmp3)*(tmp3*tmp3))
-    tmp20 = -tmp1*tmp11*tmp12 + tmp1*tmp13*tmp4*tmp6 - tmp1*tmp4*tmp6*tmp8 + tmp1*tmp8 + tmp10*tmp18 - tmp11*tmp12*tmp18*tmp4 + tmp13*tmp18*tmp19*tmp6 - tmp18*tmp19*tmp6*tmp8
-    tmp21 = -tmp20
-    tmp22 = (0.5)*tmp0
-    tmp23 = v_omega_x*v_omega_y
-    tmp24 = -tmp0*tmp16
     M = numpy.empty(shape + (6, 6))
     f = numpy.empty(shape + (6,))
     mu = numpy.empty(shape + (3, 6))
@@ -327,9 +267,9 @@ def acceleration(q, v, p):
     f[..., 0] = 0.0
     f[..., 1] = 0.0
     f[..., 2] = 0.0
-    f[..., 3] = -(v_omega_y*v_omega_y)*tmp14 - v_omega_y*v_omega_z*(tmp0 - tmp17) - tmp23*(-tmp20*tmp22 + tmp21*tmp22)
-    f[..., 4] = (v_omega_x*v_omega_x)*tmp0*tmp21 - v_omega_x*v_omega_z*(-tmp0 - tmp24) + tmp14*tmp23
-    f[..., 5] = -tmp23*((0.5)*tmp17 + (0.5)*tmp24)
+    f[..., 3] = 0.0
+    f[..., 4] = 0.0
+    f[..., 5] = 0.0
     mu[..., 0, 0] = 1.0
     mu[..., 0, 1] = 0.0
     mu[..., 0, 2] = 0.0
@@ -359,7 +299,7 @@ def rhs(y, p):
     """first-order system y = (q, v): y_dot = (q_dot, v_dot).
 
     q_dot = S(q) v, v_dot = acceleration(q, v)
-    Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 95 operations + 239 flops.
+    Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 2 operations + 239 flops.
     Arguments: y, p.  Output shape: (...) + (12,).
     """
     y = numpy.asarray(y, dtype=numpy.float64)
@@ -418,45 +358,16 @@ def multipliers(q, v, p):
     """Lagrange multipliers lambda, solved in the code.
 
     lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)
-    Operations after CSE: 95 (sympy.count_ops); temporaries: 25; solve: 203 flops (n = 6, m = 3, diagonal metric).
+    Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 203 flops (n = 6, m = 3, diagonal metric).
     Then Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f).
     Arguments: q, v, p.  Output shape: (...) + (3,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
     v = numpy.asarray(v, dtype=numpy.float64)
     shape = _batch_shape((q, 1), (v, 1), (p, 1))
-    q_theta = q[..., 4]
-    q_psi = q[..., 5]
-    v_omega_x = v[..., 3]
-    v_omega_y = v[..., 4]
-    v_omega_z = v[..., 5]
     p_k = p[..., 1]
     p_r = p[..., 2]
     tmp0 = (p_k*p_k)
-    tmp1 = numpy.sin(q_psi)
-    tmp2 = (tmp1*tmp1)
-    tmp3 = numpy.cos(q_psi)
-    tmp4 = (tmp3*tmp3)
-    tmp5 = tmp2 + tmp4
-    tmp6 = (1.0/tmp5)
-    tmp7 = numpy.tan(q_theta)
-    tmp8 = (1.0/tmp7)
-    tmp9 = tmp2*tmp8
-    tmp10 = tmp4*tmp8
-    tmp11 = (1.0/numpy.sin(q_theta))
-    tmp12 = numpy.cos(q_theta)
-    tmp13 = tmp11*tmp12
-    tmp14 = tmp0*tmp3*tmp6*(tmp10 - tmp13*tmp2 - tmp13*tmp4 + tmp9)
-    tmp15 = (1.0/(tmp7*tmp7))
-    tmp16 = -tmp10*tmp13 - tmp13*tmp9 + tmp15*tmp2 + tmp15*tmp4 + tmp5
-    tmp17 = tmp0*tmp16
-    tmp18 = (1.0/tmp1)
-    tmp19 = ((tmp3*tmp3)*(tmp3*tmp3))
-    tmp20 = -tmp1*tmp11*tmp12 + tmp1*tmp13*tmp4*tmp6 - tmp1*tmp4*tmp6*tmp8 + tmp1*tmp8 + tmp10*tmp18 - tmp11*tmp12*tmp18*tmp4 + tmp13*tmp18*tmp19*tmp6 - tmp18*tmp19*tmp6*tmp8
-    tmp21 = -tmp20
-    tmp22 = (0.5)*tmp0
-    tmp23 = v_omega_x*v_omega_y
-    tmp24 = -tmp0*tmp16
     M = numpy.empty(shape + (6, 6))
     f = numpy.empty(shape + (6,))
     mu = numpy.empty(shape + (3, 6))
@@ -500,9 +411,9 @@ def multipliers(q, v, p):
     f[..., 0] = 0.0
     f[..., 1] = 0.0
     f[..., 2] = 0.0
-    f[..., 3] = -(v_omega_y*v_omega_y)*tmp14 - v_omega_y*v_omega_z*(tmp0 - tmp17) - tmp23*(-tmp20*tmp22 + tmp21*tmp22)
-    f[..., 4] = (v_omega_x*v_omega_x)*tmp0*tmp21 - v_omega_x*v_omega_z*(-tmp0 - tmp24) + tmp14*tmp23
-    f[..., 5] = -tmp23*((0.5)*tmp17 + (0.5)*tmp24)
+    f[..., 3] = 0.0
+    f[..., 4] = 0.0
+    f[..., 5] = 0.0
     mu[..., 0, 0] = 1.0
     mu[..., 0, 1] = 0.0
     mu[..., 0, 2] = 0.0
