@@ -175,3 +175,76 @@ def test_unsimplified_and_stable_forms_agree():
     assert (full.matrix - stable.matrix).applyfunc(sp.cancel).is_zero_matrix
     with pytest.raises(sm.ImpactError, match="simplify must be"):
         derive_impact_map(scene.declaration, 0, simplify="maximal")
+
+
+def test_singularity_where_d_psi_itself_vanishes():
+    """psi = x^2 - 1 without impulsive constraints: C = 4 x^2 vanishes at x = 0 because
+    d psi = 2 x dx does, not because of a dependence on impulsive constraints."""
+    scene = sm.Scene((x, y), metric=sp.eye(2), walls=[sm.Wall(x**2 - 1)])
+    (singular,) = impact_map(scene, 0).singularities
+    assert singular.expression == x
+    assert singular.description.startswith("d psi = 0")
+    assert "impulsive" not in singular.description
+
+
+def test_factors_without_real_zeros_are_not_listed():
+    """D = span{(p, 1)} with p = 5 y^2 + y + 5 (no real root) or 2 + cos(y) (no zero) and
+    the wall x = 0: C = p^2/(1 + p^2) never vanishes, so nothing is listed; with p = y the
+    factor y is (the motion allowed is tangent to the wall at y = 0)."""
+    from symmech.impacts.degeneracy import no_real_zeros, pythagorean
+
+    for p in (5 * y**2 + y + 5, 2 + sp.cos(y)):
+        scene = sm.Scene((x, y), metric=sp.eye(2), constraints=[xd - p * yd], walls=[sm.Wall(x)])
+        assert impact_map(scene, 0).singularities == []
+    scene = sm.Scene((x, y), metric=sp.eye(2), constraints=[xd - y * yd], walls=[sm.Wall(x)])
+    (singular,) = impact_map(scene, 0).singularities
+    assert singular.expression == y and "span of the permanent constraints" in singular.description
+    assert no_real_zeros(5 * x**2 + x + 5) and no_real_zeros(m * x**2 + 3)
+    assert not no_real_zeros(x**2 - 1) and not no_real_zeros(sp.S.Zero)
+    assert not no_real_zeros(sp.cos(x) + 1) and no_real_zeros(sp.cos(x) + 2)
+    assert pythagorean(m * sp.sin(x) ** 2 + m * sp.cos(x) ** 2 - m) == 0
+
+
+def test_a_resolved_wall_of_another_scene_is_refused():
+    other = sm.Scene((x, y), metric=sp.eye(2), walls=[sm.Wall(y, name="floor")])
+    scene = sm.Scene((x, y), metric=sp.diag(2, 3), walls=[sm.Wall(y, name="floor")])
+    foreign = other.declaration.walls[0]
+    with pytest.raises(sm.ImpactError, match="does not belong to this scene"):
+        derive_impact_map(scene.declaration, foreign)
+    own = scene.declaration.walls[0]
+    assert derive_impact_map(scene.declaration, own).post_velocity == sp.Matrix([xd, -yd])
+
+
+def test_latex_of_names_with_special_characters():
+    wall = sm.Wall(y, restitution=sp.Rational(1, 2), name="rough_wall #1")
+    scene = sm.Scene((x, y), metric=sp.eye(2), walls=[wall])
+    imp = impact_map(scene, 0)
+    text = imp._repr_latex_()
+    assert r"rough\_wall \#1" in text and "rough_wall" not in text
+    assert r"\text{Theorem 3.2: }" in imp.carnot()._repr_latex_()
+
+
+@pytest.mark.parametrize(
+    "g",
+    [
+        sp.diag(10**6, 10**6, sp.Rational(1, 10**6)),
+        sp.diag(1, 1, 10**12),
+        sp.Matrix([[10**6, 1, 0], [1, 10**6, 0], [0, 0, sp.Rational(1, 10**6)]]),
+    ],
+    ids=["1e6-1e6-1e-6", "1-1-1e12", "coupled"],
+)
+def test_badly_scaled_metrics(g):
+    """C^AB has entries 10^12 apart: the regularity test is scale-invariant (Hadamard
+    ratio), so the map is derived, and it is the KKT map; a truly dependent impulsive
+    constraint is still refused."""
+    wall = sm.Wall(
+        y - sp.cos(th) / 2, restitution=sp.Rational(1, 2), impulsive_constraints=[xd - thd]
+    )
+    scene = sm.Scene((x, y, th), metric=g, walls=[wall])
+    imp = impact_map(scene, 0)
+    v = [xd, yd, thd]
+    assert (imp.post_velocity - kkt(scene, 0, v)).applyfunc(sp.cancel).is_zero_matrix
+    assert imp.carnot().holds
+    dependent = sm.Scene((x, y, th), metric=g, walls=[sm.Wall(y, impulsive_constraints=[3 * yd])])
+    with pytest.raises(sm.ImpactError, match="linearly dependent on d psi"):
+        impact_map(dependent, 0)

@@ -84,3 +84,71 @@ def test_basis_of_D_spans_the_constraint_kernel():
     B = basis_of_D(scene)
     assert B.shape == (3, 2)
     assert (sp.Matrix(scene.constraint_matrix) * B).applyfunc(sp.simplify).is_zero_matrix
+
+
+def kkt_at(scene: sm.Scene, index: int, point: dict, v_minus, dps: int = 40, V=None):
+    """Route (B) numerically: the impulse-momentum system at a state ``point`` (values of
+    q, t and the parameters), assembled from the declaration and solved with mpmath at
+    ``dps`` digits.  For states where the entries are transcendental (sin of a rational)."""
+    import mpmath as mp
+
+    w = scene.walls[index]
+    dpsi, psi_t = wall_one_form(scene, index)
+    g = scene.mass_matrix()
+    mu = sp.Matrix(scene.constraint_matrix)
+    nu = sp.Matrix(w.impulsive_matrix)
+    n, m, l = g.rows, mu.rows, nu.rows
+    A = mu.col_join(dpsi).col_join(nu)
+    alpha = sp.sympify(w.restitution).xreplace(point)
+
+    def num(e) -> mp.mpf:
+        return mp.mpf(sp.N(sp.sympify(e).xreplace(point), dps + 10))
+
+    with mp.workdps(dps):
+        G = mp.matrix([[num(g[i, j]) for j in range(n)] for i in range(n)])
+        rows = [[num(A[i, j]) for j in range(n)] for i in range(A.rows)]
+        vm = [num(e) for e in v_minus]
+        pt = num(psi_t)
+
+        def form(row: list, x: list) -> mp.mpf:
+            return mp.fsum(a * b for a, b in zip(row, x, strict=True))
+
+        if V is not None:
+            Vm = [num(e) for e in V]
+        elif pt != 0:
+            grad = mp.lu_solve(G, mp.matrix(rows[m]))
+            grad = [grad[i] for i in range(n)]
+            Vm = [-pt * e / form(rows[m], grad) for e in grad]
+        else:
+            Vm = [mp.mpf(0)] * n
+        k = len(rows)
+        big = mp.matrix(n + k, n + k)
+        rhs = mp.matrix(n + k, 1)
+        for i in range(n):
+            for j in range(n):
+                big[i, j] = G[i, j]
+            for j in range(k):
+                big[i, n + j] = -rows[j][i]
+                big[n + j, i] = rows[j][i]
+            rhs[i] = mp.fsum(G[i, j] * vm[j] for j in range(n))
+        rhs[n + m] = -num(alpha) * (form(rows[m], vm) + pt) - pt
+        for a in range(l):
+            rhs[n + m + 1 + a] = form(rows[m + 1 + a], Vm)
+        sol = mp.lu_solve(big, rhs)
+        return [sol[i] for i in range(n)]
+
+
+def kkt_exact_at(scene: sm.Scene, index: int, point: dict, v_minus, alpha=None) -> sp.Matrix:
+    """Route (B) exactly at a rational state: the declaration's matrices evaluated at
+    ``point`` (values of q, t and the parameters), then the impulse-momentum system."""
+    w = scene.walls[index]
+    dpsi, psi_t = wall_one_form(scene, index)
+    return kkt_post_velocity(
+        scene.mass_matrix().xreplace(point),
+        sp.Matrix(scene.constraint_matrix).xreplace(point),
+        dpsi.xreplace(point),
+        sp.Matrix(w.impulsive_matrix).xreplace(point),
+        sp.Matrix(v_minus),
+        sp.sympify(w.restitution if alpha is None else alpha).xreplace(point),
+        sp.sympify(psi_t).xreplace(point),
+    )

@@ -147,6 +147,41 @@ def test_text001_Phi_is_dh_dtheta_inside_the_half_turn():
         assert abs(dh(th, 2.0, 1.0)) > 0.5
 
 
+def test_text001_Phi_is_dh_dtheta_symbolically_inside_the_half_turn():
+    """For |theta| < pi/2, cos(theta) > 0 and theta -> tau = tan(theta) is a bijection
+    onto the reals with sec(theta) = +sqrt(1 + tau^2), cos = 1/sec, sin = tau/sec.  In
+    tau the printed Phi minus dh/dtheta (h the support-function gap) is an algebraic
+    expression with positive square roots; writing w = sqrt(1 + tau^2) and
+    r = sqrt(A^2 + B^2 tau^2) (both positive) makes it a rational function of tau, w, r
+    that vanishes modulo w^2 = 1 + tau^2, r^2 = A^2 + B^2 tau^2: zero for every such
+    theta, not only at sampled points."""
+    tau = sp.Symbol("tau", real=True)
+    w, r = sp.symbols("w r", positive=True)
+    h = sp.sqrt(A**2 * sp.cos(theta) ** 2 + B**2 * sp.sin(theta) ** 2)
+    psi = shapes.ellipse_gap((x, y), theta, (A, B), Plane((0, 0), (-1, 0)))
+    assert sp.simplify(psi - (-x - h)) == 0
+    diff = text001_Phi(theta, A, B) - sp.diff(h, theta)
+    sec = sp.sqrt(1 + tau**2)
+    in_tau = diff.subs(
+        {sp.sin(theta): tau / sec, sp.cos(theta): 1 / sec, sp.tan(theta): tau, sp.sec(theta): sec}
+    )
+    assert not in_tau.has(theta)
+    radicals = {
+        sp.sqrt(1 + tau**2): w,
+        sp.sqrt(1 + B**2 * tau**2 / A**2): r / A,  # A > 0
+        sp.sqrt(A**2 / (tau**2 + 1) + B**2 * tau**2 / (tau**2 + 1)): r / w,
+    }
+    rational = sp.together(in_tau.subs(radicals))
+    assert not any(
+        isinstance(p, sp.Pow) and not p.exp.is_Integer for p in sp.preorder_traversal(rational)
+    )
+    numerator = sp.expand(sp.fraction(rational)[0])
+    _, remainder = sp.reduced(numerator, [w**2 - 1 - tau**2, r**2 - A**2 - B**2 * tau**2], w, r)
+    assert remainder == 0
+    # the same difference without the substitution, by simplify
+    assert sp.simplify(in_tau) == 0
+
+
 def test_support_function_route_is_accurate_near_pi_over_2():
     """In float64, d psi/d theta from the support function keeps full relative accuracy
     near theta = pi/2; through phi_c = arctan(-(b/a) tan theta) it loses digits."""

@@ -7,6 +7,10 @@
 * :func:`kkt_post_velocity`: the independent impulse-momentum (KKT) route, for
   cross-checks.
 * :mod:`symmech.impacts.stability`: the stabilising step for float64 evaluation.
+* :mod:`symmech.impacts.adjugate`: the cost-bounded exact route for the projectors
+  (adjugates over the polynomial ring, one shared denominator, bounded final gcds).
+* :mod:`symmech.impacts.identity`: exact evaluation at a random point with a degree bound
+  (Schwartz-Zippel), how :meth:`ImpactMap.carnot` decides large maps.
 """
 
 from symmech.impacts.carnot import CarnotResult

@@ -17,15 +17,29 @@ along N"; section 3.2: the same for ``{mu^a, d psi, nu^B}``).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
+import mpmath as mp
 import numpy as np
 import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
 
 from symmech.errors import ImpactError
+from symmech.impacts.adjugate import shared_denominators
 
-__all__ = ["Singularity", "check_regular", "singular_set"]
+if TYPE_CHECKING:
+    from symmech.impacts.projectors import ImpactProjectors
+
+__all__ = [
+    "FACTOR_MAX_OPS",
+    "Singularity",
+    "check_regular",
+    "impact_singularities",
+    "no_real_zeros",
+    "singular_set",
+]
 
 _SYMBOLIC_OPS = 200
 
@@ -57,10 +71,40 @@ def _numeric(M: sp.MatrixBase, point: dict) -> np.ndarray | None:
     return A.real
 
 
-def _psd_rank(A: np.ndarray) -> int:
-    w = np.linalg.eigvalsh(0.5 * (A + A.T))
-    scale = max(float(np.abs(w).max(initial=0.0)), 1e-300)
-    return int(np.sum(np.abs(w) > 1e-10 * scale))
+#: A leading block of C^AB counts as singular at a point when det / prod(diagonal) (its
+#: Hadamard ratio, in [0, 1] for a Gram matrix and invariant under rescaling the
+#: one-forms) is below this; evaluated with 40 digits (exactly at rational points).
+HADAMARD_TOLERANCE = 1e-20
+
+
+def _singular_blocks(C: sp.MatrixBase, point: dict) -> list[bool] | None:
+    """For each leading block of the Gram matrix C at ``point``: is it singular?  The
+    test is scale-invariant (a metric like diag(10^6, 10^6, 10^-6) makes the entries of C
+    differ by 10^12 without making it singular); None if C cannot be evaluated."""
+    vals = sp.Matrix(C).xreplace(point)
+    k = vals.rows
+    if all(e.is_Rational for e in vals):
+        out = []
+        for j in range(k):
+            block = vals[: j + 1, : j + 1]
+            diag = [block[i, i] for i in range(j + 1)]
+            out.append(any(d <= 0 for d in diag) or block.det() == 0)
+        return out
+    try:
+        with mp.workdps(40):
+            A = mp.matrix([[mp.mpf(sp.N(e, 45)) for e in row] for row in vals.tolist()])
+            out = []
+            for j in range(k):
+                block = A[: j + 1, : j + 1]
+                diag = [block[i, i] for i in range(j + 1)]
+                if any(d <= 0 for d in diag):
+                    out.append(True)
+                    continue
+                ratio = mp.det(block) / mp.fprod(diag)
+                out.append(bool(abs(ratio) < HADAMARD_TOLERANCE))
+            return out
+    except (TypeError, ValueError, ZeroDivisionError):
+        return None
 
 
 def _identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
@@ -69,6 +113,9 @@ def _identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
     expr = sp.sympify(expr)
     if expr == 0:
         return True
+    exact = [expr.xreplace(p) for p in points]
+    if any(e.is_Rational and e != 0 for e in exact):
+        return False  # exactly non-zero at a rational point
     values = [_numeric(sp.Matrix([[expr]]), p) for p in points]
     finite = [v for v in values if v is not None]
     if any(abs(v[0, 0]) >= 1e-20 for v in finite):
@@ -116,16 +163,11 @@ def check_regular(
     k = C.rows
     if k == 1:
         return
-    ranks: list[list[int]] = []
-    for point in points:
-        A = _numeric(C, point)
-        if A is None:
-            continue
-        ranks.append([_psd_rank(A[: j + 1, : j + 1]) for j in range(k)])
-    if not ranks:
+    verdicts = [v for v in (_singular_blocks(C, point) for point in points) if v is not None]
+    if not verdicts:
         return
     for j in range(1, k):
-        if all(r[j] < j + 1 for r in ranks):
+        if all(v[j] for v in verdicts):
             symbolic = (
                 sp.simplify(C[: j + 1, : j + 1].det())
                 if sp.count_ops(C[: j + 1, : j + 1]) <= _SYMBOLIC_OPS
@@ -142,7 +184,20 @@ def check_regular(
             )
 
 
+#: Expressions with more operations than this are not factored (kept whole) and closed
+#: forms with more are not scanned for denominators (see :func:`singular_set`).
+FACTOR_MAX_OPS = 400
+
+Description = str | Callable[[sp.Expr], str]
+
+
 def _factors(expr: sp.Expr) -> list[sp.Expr]:
+    """The non-constant irreducible factors of the numerator of ``expr`` (the numerator
+    itself, with its numeric content removed, when it is too large to factor)."""
+    expr = sp.sympify(expr)
+    if sp.count_ops(expr) > FACTOR_MAX_OPS:
+        num = sp.fraction(sp.together(expr))[0]
+        return [sp.factor_terms(num).as_coeff_Mul()[1]] if num.free_symbols else []
     expr = sp.cancel(sp.together(expr))
     num, _ = sp.fraction(expr)
     try:
@@ -153,40 +208,220 @@ def _factors(expr: sp.Expr) -> list[sp.Expr]:
 
 
 def _divides(f: sp.Expr, e: sp.Expr) -> bool:
-    quotient = sp.cancel(e / f)
-    den = sp.fraction(quotient)[1]
-    return not (den.free_symbols & f.free_symbols)
+    """True if the polynomial f divides the numerator of e (exact polynomial division over
+    the generators of both; False when either is not a polynomial or too large)."""
+    if sp.count_ops(f) > FACTOR_MAX_OPS or sp.count_ops(e) > FACTOR_MAX_OPS:
+        return sp.expand(f - e) == 0
+    num = sp.fraction(sp.together(e))[0]
+    try:
+        pf, pe = sp.parallel_poly_from_expr([f, num])[0]
+    except (sp.PolynomialError, sp.GeneratorsNeeded):
+        return False
+    if pf.is_zero:
+        return False
+    return pe.rem(pf).is_zero
+
+
+def pythagorean(f: sp.Expr) -> sp.Expr:
+    """f with ``sin(u)^2`` replaced by ``1 - cos(u)^2`` wherever both ``sin(u)`` and
+    ``cos(u)`` occur (the remainder modulo ``sin(u)^2 + cos(u)^2 - 1``, degree <= 1 in
+    each such sin(u)); f itself when it is not small or not polynomial in them."""
+    f = sp.sympify(f)
+    if sp.count_ops(f) > FACTOR_MAX_OPS:
+        return f
+    sines = {e.args[0]: e for e in f.atoms(sp.sin)}
+    for cos in f.atoms(sp.cos):
+        sin = sines.get(cos.args[0])
+        if sin is None:
+            continue
+        try:
+            f = sp.expand(sp.rem(f, sin**2 + cos**2 - 1, sin))
+        except sp.PolynomialError:  # pragma: no cover - f not polynomial in sin(u)
+            return f
+    return f
+
+
+def _positive_on_the_circle(f: sp.Expr) -> bool:
+    """``f = p cos(u)^2 + q sin(u)^2 + r`` with p, q > 0 and r >= 0 (from the symbols'
+    assumptions): then ``f >= min(p, q) > 0`` (e.g. ``a^2 cos^2 + b^2 sin^2``)."""
+    for cos in f.atoms(sp.cos):
+        sin = sp.sin(cos.args[0])
+        if not f.has(sin):
+            continue
+        try:
+            poly = sp.Poly(f, cos, sin)
+        except sp.PolynomialError:
+            continue
+        terms = dict(poly.terms())
+        if set(terms) - {(2, 0), (0, 2), (0, 0)} or (2, 0) not in terms or (0, 2) not in terms:
+            continue
+        p, q, r = terms[(2, 0)], terms[(0, 2)], terms.get((0, 0), sp.S.Zero)
+        if p.is_positive and q.is_positive and r.is_nonnegative and cos.args[0].is_real:
+            return True
+    return False
+
+
+def no_real_zeros(f: sp.Expr) -> bool:
+    """True if f provably has no real zero: from the symbols' assumptions (``k**2 + r**2``
+    with positive k, a sum of squares plus a positive constant), or f is a polynomial in
+    one real symbol with no real root, or in one ``sin(u)``/``cos(u)`` (u real) with no
+    root in [-1, 1] (counted exactly by Sturm sequences)."""
+    f = sp.sympify(f)
+    if f == 0:
+        return False
+    if not f.free_symbols or f.is_nonzero:
+        return True
+    if _positive_on_the_circle(f):
+        return True
+    try:
+        poly = sp.Poly(f)
+    except sp.PolynomialError:
+        return False
+    if len(poly.gens) != 1 or not poly.domain.is_Exact or poly.degree() < 1:
+        return False
+    (gen,) = poly.gens
+    try:
+        if gen.is_Symbol and gen.is_real:
+            return poly.count_roots() == 0
+        if isinstance(gen, (sp.sin, sp.cos)) and gen.args[0].is_real:
+            return poly.count_roots(-1, 1) == 0
+    except (sp.PolynomialError, NotImplementedError):  # pragma: no cover
+        return False
+    return False
 
 
 def singular_set(
-    structural: Iterable[tuple[sp.Expr, str]],
-    closed_form: Iterable[sp.Expr],
-    closed_form_description: str,
+    structural: Iterable[tuple[sp.Expr, Description]],
+    closed_form: Iterable[sp.Expr] = (),
+    closed_form_description: str = "",
 ) -> list[Singularity]:
-    """Collect the singular set: ``structural`` (expression, description) pairs first, then
-    the factors of the denominators of ``closed_form`` not already covered.
+    """Collect the singular set: the factors of the ``structural`` expressions first (each
+    with its description; a callable description receives the factor), then the factors
+    of the denominators of ``closed_form`` entries not already covered (entries above
+    :data:`FACTOR_MAX_OPS` operations are not scanned: pass the structural denominators
+    of the construction instead).
 
-    Factors that sympy proves non-zero from the symbols' assumptions (``k**2 + r**2`` with
-    positive k, r) are dropped; every kept factor is an expression in q, t, the parameters
-    (and, for the energy law, the velocities).
+    Factors with provably no real zero (:func:`no_real_zeros`: ``k**2 + r**2`` with
+    positive k, r; ``5 x^2 + x + 5``) are dropped; every kept factor is an expression in
+    q, t, the parameters (and, for the energy law, the velocities).
     """
     out: list[Singularity] = []
     seen: list[sp.Expr] = []
 
-    def add(f: sp.Expr, description: str) -> None:
-        f = sp.factor(f)
-        if not f.free_symbols or f.is_nonzero:
+    def add(f: sp.Expr, description: Description) -> None:
+        reduced = pythagorean(f)
+        if not reduced.free_symbols or no_real_zeros(reduced) or no_real_zeros(f):
             return
+        if sp.count_ops(reduced) < sp.count_ops(f):
+            f = reduced
+        if sp.count_ops(f) <= FACTOR_MAX_OPS:
+            f = sp.factor(f)
         if any(_divides(f, s) or _divides(s, f) for s in seen):
             return
         seen.append(f)
-        out.append(Singularity(f, description))
+        text = description(f) if callable(description) else description
+        out.append(Singularity(f, text))
 
     for expr, description in structural:
         for f in _factors(expr):
             add(f, description)
     for expr in closed_form:
+        if sp.count_ops(expr) > FACTOR_MAX_OPS:
+            continue
         den = sp.fraction(sp.cancel(sp.together(expr)))[1]
         for f in _factors(den):
             add(f, closed_form_description)
     return out
+
+
+def _divides_row(f: sp.Expr, row: Sequence[sp.Expr]) -> bool:
+    entries = [e for e in row if e != 0]
+    return bool(entries) and all(_divides(f, e) for e in entries)
+
+
+def impact_singularities(
+    proj: ImpactProjectors,
+    psi_t: sp.Expr,
+    default_velocity: bool,
+    extra: Sequence[sp.Expr] = (),
+    closed_form: Sequence[sp.Expr] = (),
+    also_scan: Sequence[sp.Expr] = (),
+) -> list[Singularity]:
+    """The singular set of an impact map built from ``proj``.
+
+    Its denominators are those of the construction: the metric (det g), the permanent
+    Gram matrix (the bordered determinant d1), the Gram matrix C^AB of the wall and the
+    impulsive constraints (its determinant; where it is a factor of every entry of d psi
+    the description says so, for then d psi itself vanishes), ``g(grad psi, grad psi)``
+    for the default wall velocity of a moving wall, and the denominators of the inputs
+    (entries of g, d psi, nu, psi_t and the ``extra`` expressions, e.g. a given wall
+    velocity).  These are the shared denominators of the adjugate route
+    (:mod:`symmech.impacts.adjugate`; formed here when another route built ``proj``), and
+    the list is then complete; only when the entries admit no rational-function field are
+    they formed by sympy determinants and the small entries of ``closed_form`` scanned.
+    The small entries of ``also_scan`` (e.g. the weights of the energy law, which divide
+    by pivots of C^AB) are always scanned.
+    """
+    dpsi = list(proj.dpsi)
+    l = proj.nu.rows
+    gradient_vanishes = (
+        "d psi = 0: the gradient of the wall function vanishes here, so psi = 0 is not a"
+        " regular wall (Carnot paper section 3.1 assumes d psi != 0 along N)"
+    )
+
+    def gram(f: sp.Expr) -> str:
+        if _divides_row(f, dpsi) or (l == 0 and proj.mu.rows == 0):
+            # without constraints C = g(grad psi, grad psi) vanishes only where d psi does
+            return gradient_vanishes
+        if l == 0:
+            return (
+                "det C^AB = C = g(P grad psi, P grad psi) = 0 (Carnot paper eq. 7): d psi lies"
+                " in the span of the permanent constraints here, so every allowed motion is"
+                " tangent to the wall"
+            )
+        return (
+            "det C^AB = 0 (Carnot paper eq. 7, section 3.2): d psi and the impulsive"
+            " constraints become dependent modulo the permanent constraints"
+        )
+
+    def normal(f: sp.Expr) -> str:
+        if _divides_row(f, dpsi):
+            return gradient_vanishes
+        return "g(grad psi, grad psi) = 0 in the default wall velocity"
+
+    metric = "the metric g (velocity basis) is singular: g^-1 and Y^A = g^-1 nu^A undefined"
+    permanent = "the permanent constraints become dependent (mu g^-1 mu^T singular)"
+    inputs = "denominator of the closed form (derivatives of psi, the metric or the frame)"
+    structural: list[tuple[sp.Expr, Description]] = []
+    dens = proj.denominators
+    g = sp.Matrix(proj.g)
+    if dens is None:  # the sympy route: the same denominators, formed cheaply if possible
+        dens = shared_denominators(g, sp.Matrix(proj.mu), sp.Matrix(proj.dpsi), sp.Matrix(proj.nu))
+    complete = dens is not None
+    # without constraints C^00 = g(grad psi, grad psi) > 0 wherever some component of
+    # d psi provably never vanishes
+    nonvanishing = any(no_real_zeros(e) for e in dpsi)
+    never_tangent = l == 0 and proj.mu.rows == 0 and nonvanishing
+    if dens is not None:
+        structural.append((dens.metric, metric))
+        if dens.permanent is not None:
+            structural.append((dens.permanent, permanent))
+        if not never_tangent:
+            structural.append((dens.gram, gram))
+    else:
+        with dotprodsimp(False):  # no simplification inside sympy's determinants
+            if not all(e.is_number for e in g):
+                structural.append((g.det(method="berkowitz"), metric))
+            mu = sp.Matrix(proj.mu)
+            if mu.rows and not all(e.is_number for e in mu * sp.Matrix(proj.Y)):
+                structural.append((sp.Matrix(mu * g.LUsolve(mu.T)).det(), permanent))
+            if not never_tangent:
+                structural.append((sp.Matrix(proj.C).det(method="berkowitz"), gram))
+    if sp.sympify(psi_t) != 0 and default_velocity and not nonvanishing:
+        structural.append(((sp.Matrix(proj.dpsi) * sp.Matrix(proj.grad_psi))[0, 0], normal))
+    for e in [*g, *proj.dpsi, *proj.nu, *proj.mu, psi_t, *extra]:
+        den = sp.fraction(sp.together(e))[1]
+        if den.free_symbols:
+            structural.append((den, inputs))
+    scanned = [*(() if complete else closed_form), *also_scan]
+    return singular_set(structural, scanned, inputs)

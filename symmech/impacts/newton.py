@@ -14,6 +14,13 @@ alpha, the post-impact velocity is affine in the pre-impact velocity,
   ``c = [dpsi; nu] V`` are the wall-velocity components entering eqs. 19-20,
   ``W = PY K c`` (section 4.2) and ``c_0 = dpsi(V) = -psi_t``.
 
+Example 4.4 of the paper (the sphere of Example 3.13 hitting the moving wall x = f(t))
+prints the map as ``(separation) = (approach) M`` with row vectors; its 6 x 6 matrix M
+reproduces this map, and the paper's velocities, only acting on *columns*,
+``v+ - W = M (v- - W)`` (M is ``matrix`` here, entry by entry); read as printed (rows
+times M) it gives a different, wrong map.  ``tests/test_impacts_examples.py::
+test_example_4_4_matrix_multiplies_columns_not_rows`` checks both readings.
+
 The wall velocity V: only its normal part is fixed by psi (a point of the wall stays on
 the wall, ``dpsi(V) + psi_t = 0``).  :func:`wall_velocity` returns the default
 ``V = -(psi_t / g(grad psi, grad psi)) grad psi``, the g-normal velocity of the wall (it

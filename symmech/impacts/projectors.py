@@ -31,11 +31,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import sympy as sp
+from sympy.matrices.utilities import dotprodsimp
 from sympy.polys.matrices import DomainMatrix
 
 from symmech.constraints.projectors import projectors as permanent_projectors
 from symmech.constraints.projectors import solve_spd
 from symmech.geometry.simplification import Level, tidy, tidy_matrix
+from symmech.impacts.adjugate import Denominators, adjugate_route
 from symmech.impacts.quadratic import common_domain
 
 __all__ = ["ImpactProjectors", "impact_projectors"]
@@ -49,7 +51,9 @@ class ImpactProjectors:
     (columns ``Y^0 = grad psi``, ``Y^A``), ``PY`` (columns ``P(Y^A)``), ``C`` (``C^{AB}``),
     ``K`` (``C_{AB}``, the inverse of C), ``beta`` (rows ``beta^B``), ``QQ`` and ``PP``
     (section 3.2), ``T`` (T~, Prop. 3.4), ``Qt`` and ``Pt`` (Q~ and P~, eq. 7) and ``N``
-    (the column ``sum_A C_A0 P(Y^A)`` spanning Im T~).
+    (the column ``sum_A C_A0 P(Y^A)`` spanning Im T~).  ``denominators`` holds the
+    shared polynomial denominators when the adjugate route built the objects
+    (:class:`~symmech.impacts.adjugate.Denominators`), else None.
     """
 
     g: sp.ImmutableMatrix
@@ -69,6 +73,7 @@ class ImpactProjectors:
     Qt: sp.ImmutableMatrix
     Pt: sp.ImmutableMatrix
     N: sp.ImmutableMatrix
+    denominators: Denominators | None = None
 
     @property
     def A(self) -> sp.ImmutableMatrix:
@@ -82,12 +87,16 @@ class ImpactProjectors:
 
 
 def _inverse(C: sp.Matrix, level: Level) -> sp.Matrix:
+    """``C^{-1} = adj(C) / det(C)`` (closed form, one shared denominator; C is small)."""
     k = C.rows
     if k == 1:
         return sp.Matrix([[tidy(1 / C[0, 0], level)]])
     if C.is_diagonal():
         return sp.diag(*[tidy(1 / C[i, i], level) for i in range(k)])
-    return tidy_matrix(C.inv(method="LU"), level)
+    with dotprodsimp(False):  # no simplification inside sympy's matrix arithmetic
+        det = C.det(method="berkowitz")
+        adj = C.adjugate(method="berkowitz")
+    return tidy_matrix(adj / det, level)
 
 
 def impact_projectors(
@@ -101,11 +110,16 @@ def impact_projectors(
     """Build P, Q, Y^A, P(Y^A), C^AB, C_AB, beta^B, QQ, PP, T~, Q~, P~ (Carnot paper 002).
 
     Section 2.2 (P, Q), eq. 7 (Q~, P~), section 3.2 and Prop. 3.4 (QQ, PP, T~).  ``level``
-    is the simplification level of :mod:`symmech.geometry.simplification` applied to the
-    intermediate results; with a level other than ``"none"`` the algebra is done exactly
-    in a fraction field when possible (:func:`_in_field`), which yields cancelled
-    entries directly.  ``check(C, PY)``, if given, is called before C is inverted
-    (see :func:`symmech.impacts.degeneracy.check_regular`) and may raise.
+    is the simplification level of :mod:`symmech.geometry.simplification`.  With a level
+    other than ``"none"`` the algebra is exact: over the rationals when every entry is a
+    number (:func:`_in_field`), else by the adjugate route of
+    :mod:`symmech.impacts.adjugate` (polynomial arithmetic, one shared denominator per
+    object, cost-bounded final cancellation), which yields cancelled entries when they
+    are small.  Otherwise, or when that route declines, the objects are built with
+    sympy arithmetic, inverses as ``adj/det``, and :func:`~symmech.geometry.
+    simplification.tidy` applied to the intermediate results.  ``check(C, PY)``, if given,
+    is called before C is inverted (see :func:`symmech.impacts.degeneracy.check_regular`)
+    and may raise.
     """
     g = sp.Matrix(g)
     n = g.rows
@@ -113,9 +127,13 @@ def impact_projectors(
     dpsi = sp.Matrix(dpsi)
     nu = sp.Matrix(nu) if nu.rows else sp.zeros(0, n)
     if level != "none":
-        fast = _in_field(g, mu, dpsi, nu, check)
-        if fast is not None:
-            return fast
+        field = common_domain([g, mu, dpsi, nu])
+        if field.K is not None and not field.K.is_FractionField:
+            return _in_field(field, g, mu, dpsi, nu, check)
+        routed = adjugate_route(field, g, mu, dpsi, nu, check)
+        if routed is not None:
+            objects, denominators = routed
+            return _pack(g, mu, dpsi, nu, **objects, denominators=denominators)
     P, Q = permanent_projectors(g, mu, level)
     A = dpsi.col_join(nu)
     Y = solve_spd(g, A.T, level)
@@ -138,7 +156,9 @@ def impact_projectors(
     return _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N)
 
 
-def _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N) -> ImpactProjectors:
+def _pack(
+    g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N, denominators=None
+) -> ImpactProjectors:
     im = sp.ImmutableMatrix
     return ImpactProjectors(
         g=im(g),
@@ -158,23 +178,20 @@ def _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N) -> Imp
         Qt=im(Qt),
         Pt=im(Pt),
         N=im(N),
+        denominators=denominators,
     )
 
 
 def _in_field(
+    ring,
     g: sp.Matrix,
     mu: sp.Matrix,
     dpsi: sp.Matrix,
     nu: sp.Matrix,
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
-) -> ImpactProjectors | None:
-    """The same construction in exact field arithmetic (the fraction field of the
-    parameters, with sin, cos, radicals... as generators; see
-    :mod:`symmech.impacts.quadratic`).  Every entry comes out as a cancelled fraction, so no
-    intermediate simplification is needed.  Returns None if no such field exists."""
-    ring = common_domain([g, mu, dpsi, nu])
-    if ring.K is None:
-        return None
+) -> ImpactProjectors:
+    """The same construction in exact arithmetic over the rationals (every entry a
+    number): exact and cheap, no simplification needed."""
     n = g.rows
     Kf = ring.K
     G = ring.matrix(g)
@@ -195,7 +212,8 @@ def _in_field(
     C, PY = out(Cd), out(PYd)
     if check is not None:
         check(C, PY)
-    Kd = Cd.inv()
+    adj, det = Cd.adj_det()
+    Kd = adj * Kf.quo(Kf.one, det)
     betad = PYd.transpose() * G
     QQd = PYd * Kd * betad
     Nd = PYd * Kd[:, 0]
