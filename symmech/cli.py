@@ -54,6 +54,7 @@ from typing import NoReturn
 
 import sympy as sp
 
+from symmech.declaration.latex import latex_text
 from symmech.declaration.symbols import coordinates as make_coordinates
 from symmech.errors import SceneError, SymmechError
 from symmech.examples import EXAMPLES, example
@@ -199,9 +200,9 @@ class Derivation:
         """LaTeX: a ``\\paragraph`` per section and display math for each value."""
         out = []
         for title, value in self.sections:
-            out.append(f"\\paragraph{{{_latex_text(title)}}}")
+            out.append(f"\\paragraph{{{latex_text(title)}}}")
             if isinstance(value, str):
-                out.append(_latex_text(value))
+                out.append(latex_text(value))
             elif isinstance(value, list):
                 if not value:
                     out.append("(none)")
@@ -254,29 +255,6 @@ def _pretty(value: object) -> str:
 
 def _pretty_ascii(value: object) -> str:
     return sp.pretty(value, use_unicode=False, wrap_line=False)
-
-
-#: LaTeX text-mode escapes (``^``, ``~``, ``<`` and ``>`` are not plain characters there
-#: either: with the default font encoding ``<`` prints as an inverted exclamation mark).
-_LATEX_TEXT = {
-    "\\": "\\textbackslash{}",
-    "&": "\\&",
-    "%": "\\%",
-    "$": "\\$",
-    "#": "\\#",
-    "_": "\\_",
-    "{": "\\{",
-    "}": "\\}",
-    "^": "\\textasciicircum{}",
-    "~": "\\textasciitilde{}",
-    "<": "\\textless{}",
-    ">": "\\textgreater{}",
-}
-
-
-def _latex_text(text: str) -> str:
-    """``text`` for LaTeX text mode (a section title), each special character escaped once."""
-    return "".join(_LATEX_TEXT.get(ch, ch) for ch in text)
 
 
 #: Above this many coordinates ``show`` leaves out the Christoffel symbols (or connection

@@ -1,7 +1,9 @@
 """The Scene: a declared mechanical system and everything symmech derives from it.
 
 A :class:`Scene` is immutable.  Each derived quantity is computed lazily, once, when first
-asked for, and cached; nothing is derived at construction beyond validation.
+asked for, and cached; nothing is derived at construction beyond validation.  The cache
+is private (a name-mangled slot) and exposed only as a read-only view, so a derived
+result cannot be replaced from outside; a second call returns the identical object.
 
 Layering: ``Scene`` is a facade over the layers to its left (declaration -> geometry ->
 constraints -> impacts); those layers work on plain sympy matrices and never import it.
@@ -9,13 +11,15 @@ constraints -> impacts); those layers work on plain sympy matrices and never imp
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from types import MappingProxyType
 from typing import Any
 
 import sympy as sp
 
-from symmech.constraints.dynamics import constrained_acceleration, constraint_rate, multipliers
+from symmech.constraints.dynamics import constrained_solution, constraint_rate
 from symmech.constraints.projectors import gradients, gram, projectors, solve_spd
+from symmech.declaration.latex import latex_text
 from symmech.declaration.spec import Declaration, ResolvedWall, declare
 from symmech.declaration.wall import Wall
 from symmech.errors import SceneError
@@ -26,10 +30,19 @@ from symmech.geometry.connection import (
     forcing,
 )
 from symmech.geometry.lie import commutation_coefficients
-from symmech.geometry.simplification import Level, tidy_matrix
+from symmech.geometry.simplification import Level, check_level, tidy_matrix
 from symmech.impacts import ImpactMap, derive_impact_map
 
 __all__ = ["Scene"]
+
+#: Matrices with more entries than this are shown by their shape in ``_repr_latex_``.
+_LATEX_MAX_ENTRIES = 64
+
+
+def _latex_matrix(M: sp.MatrixBase) -> str:
+    if M.rows * M.cols > _LATEX_MAX_ENTRIES:
+        return rf"\text{{({M.rows} x {M.cols} matrix)}}"
+    return sp.latex(M)
 
 
 class Scene:
@@ -78,10 +91,10 @@ class Scene:
     Matrix([
     [R**2/(R**2 + k**2), 0, R*k**2/(R**2 + k**2)],
     [                 0, 1,                    0],
-    [     R/(R**2 + k**2), 0,     k**2/(R**2 + k**2)]])
+    [   R/(R**2 + k**2), 0,   k**2/(R**2 + k**2)]])
     """
 
-    __slots__ = ("_cache", "_decl")
+    __slots__ = ("__derived", "_decl")
 
     def __init__(
         self,
@@ -110,7 +123,7 @@ class Scene:
             name=name,
         )
         object.__setattr__(self, "_decl", decl)
-        object.__setattr__(self, "_cache", {})
+        object.__setattr__(self, "_Scene__derived", {})
 
     # -- immutability -----------------------------------------------------------------
     def __setattr__(self, key: str, value: object) -> None:
@@ -119,8 +132,13 @@ class Scene:
     def __delattr__(self, key: str) -> None:
         raise AttributeError(f"Scene is immutable; cannot delete {key!r}")
 
+    @property
+    def _cache(self) -> Mapping[tuple, Any]:
+        """The derived quantities computed so far, as a read-only view (for inspection)."""
+        return MappingProxyType(self.__derived)
+
     def _cached(self, key: tuple, build: Callable[[], Any]) -> Any:
-        cache = self._cache
+        cache = self.__derived
         if key not in cache:
             cache[key] = build()
         return cache[key]
@@ -194,6 +212,32 @@ class Scene:
             parts.append(f"{len(self.walls)} walls")
         return ", ".join(parts) + ")"
 
+    def _repr_latex_(self) -> str:
+        r"""A compact LaTeX summary for Jupyter: coordinates, metric, potential,
+        constraints and walls, one per line (``$\begin{array}{l} ... \end{array}$``).
+        Matrices with more than ``_LATEX_MAX_ENTRIES`` entries are summarised by their
+        shape."""
+        lx = sp.latex
+        q = ", ".join(lx(c) for c in self.coordinates)
+        lines = [rf"\text{{Scene {latex_text(self.name)}: }} q = ({q})"]
+        if self.frame is not None:
+            v = ", ".join(lx(c) for c in self.velocities)
+            lines.append(rf"\dot q = S\,v,\quad v = ({v}),\quad S = {_latex_matrix(self.frame)}")
+            lines.append(rf"M = {_latex_matrix(self.mass_matrix())}")
+        else:
+            lines.append(rf"g = {_latex_matrix(self.mass_matrix())}")
+        lines.append(rf"V = {lx(self.potential)}")
+        if self.is_constrained:
+            lines.append(rf"\mu = {_latex_matrix(self.constraint_matrix)},\quad \mu\,v = 0")
+        for w in self.walls:
+            parts = [rf"\psi_{{\text{{{latex_text(w.name)}}}}} = {lx(w.psi)} \geq 0"]
+            parts.append(rf"e = {lx(w.restitution)}")
+            if w.impulsive_matrix.rows:
+                parts.append(rf"\nu = {_latex_matrix(w.impulsive_matrix)}")
+            parts.append(rf"\text{{{w.law} law}}")
+            lines.append(r",\quad ".join(parts))
+        return "$\\begin{array}{l}" + " \\\\ ".join(lines) + "\\end{array}$"
+
     # -- metric and energy ------------------------------------------------------------------
     def mass_matrix(self) -> sp.ImmutableMatrix:
         """The n x n metric in the velocity basis (g, or S^T g S in a frame): T = 1/2 v^T M v."""
@@ -220,14 +264,21 @@ class Scene:
         return self.kinetic_energy() + self.potential
 
     # -- geometry ---------------------------------------------------------------------------------
-    def christoffel(self, kind: int = 2, simplify: Level = "full") -> sp.ImmutableDenseNDimArray:
+    def christoffel(self, kind: int = 2, simplify: Level = "light") -> sp.ImmutableDenseNDimArray:
         """Christoffel symbols of the coordinate metric, an Array of shape (n, n, n).
 
         ``kind=2``: ``[k, i, j] = Gamma^k_ij``; ``kind=1``: ``[k, i, j] = Gamma_kij``
-        (slides 000).  ``simplify`` follows :mod:`symmech.geometry.simplification`.
+        (slides 000).  Formed for i <= j and mirrored.  ``simplify`` follows
+        :mod:`symmech.geometry.simplification`: ``"light"`` (default) gives exact
+        normal forms (for kind 2 with one shared determinant, see
+        :func:`symmech.geometry.connection.christoffel_second_kind`), falling back to the
+        symbols as built when that normal form exceeds its term budget (dense metrics
+        beyond about 6 x 6 with trigonometric entries); ``"full"`` adds a bounded
+        ``sympy.simplify`` per entry (seconds per entry); ``"none"`` is the raw LU solve.
         """
-        if kind not in (1, 2):
+        if isinstance(kind, bool) or kind not in (1, 2):
             raise SceneError(f"christoffel: kind must be 1 or 2, got {kind!r}")
+        check_level(simplify, "christoffel")
         fn = christoffel_first_kind if kind == 1 else christoffel_second_kind
         return self._cached(
             ("christoffel", kind, simplify),
@@ -247,8 +298,12 @@ class Scene:
 
         return self._cached(("commutation",), build)
 
-    def connection_coefficients(self, simplify: Level = "full") -> sp.ImmutableDenseNDimArray:
-        """omega^m_ij with nabla_{u_i} u_j = omega^m_ij u_m, an Array [m, i, j] (slides 000)."""
+    def connection_coefficients(self, simplify: Level = "light") -> sp.ImmutableDenseNDimArray:
+        """omega^m_ij with nabla_{u_i} u_j = omega^m_ij u_m, an Array [m, i, j] (slides 000).
+
+        ``simplify`` as in :meth:`christoffel`.
+        """
+        check_level(simplify, "connection_coefficients")
         return self._cached(
             ("connection", simplify),
             lambda: connection_coefficients(
@@ -319,38 +374,46 @@ class Scene:
         ``lambda = C^-1 (-mu_dot v - mu M^-1 f)`` (Carnot §2.2, sign re-derived; see
         :mod:`symmech.constraints.dynamics`).
         """
+        check_level(simplify, "multipliers")
         if not self.is_constrained:
             raise SceneError(f"scene {self.name!r}: multipliers() needs constraints; it has none")
-        return self._cached(
-            ("lambda", simplify),
-            lambda: sp.ImmutableMatrix(
-                multipliers(
-                    self._decl.metric,
-                    self.forcing(),
-                    self.constraint_matrix,
-                    self.constraint_rate(),
-                    simplify,
-                )
-            ),
-        )
+        return self._cached(("lambda", simplify), lambda: self._constrained(simplify)[1])
+
+    def _constrained(self, simplify: Level) -> tuple[sp.ImmutableMatrix, sp.ImmutableMatrix]:
+        """(v_dot, lambda) of the constrained system, solved once per level."""
+
+        def build() -> tuple[sp.ImmutableMatrix, sp.ImmutableMatrix]:
+            acc, lam = constrained_solution(
+                self._decl.metric,
+                self.forcing(),
+                self.constraint_matrix,
+                self.constraint_rate(),
+                simplify,
+            )
+            return sp.ImmutableMatrix(acc), sp.ImmutableMatrix(lam)
+
+        return self._cached(("constrained", simplify), build)
 
     def acceleration(self, simplify: Level = "light") -> sp.ImmutableMatrix:
         """The acceleration as an n x 1 Matrix in q, the velocities, t and the parameters.
 
         Unconstrained: ``q_ddot = -Gamma(q_dot, q_dot) - g^-1 dV`` (geodesic equation with a
         potential).  Constrained: ``v_dot = M^-1 (f + mu^T lambda)``, which keeps v in D.
-        With a frame it is v_dot, the rate of the quasi-velocities.  Uses a symbolic LU
-        solve; for large systems use :meth:`mass_matrix` and :meth:`forcing` instead.
+        With a frame it is v_dot, the rate of the quasi-velocities.  ``simplify="light"``
+        solves exactly with the strategy of :mod:`symmech.geometry.field` (normal forms
+        with the Pythagorean reduction, a shared determinant for dense trigonometric
+        metrics; with constraints one solve of the bordered system
+        ``[[M, mu^T], [mu, 0]]``, see :func:`symmech.constraints.dynamics.
+        constrained_solution`, which also gives :meth:`multipliers`); ``"none"`` is a
+        symbolic LU solve.  For large systems use
+        :meth:`mass_matrix` and :meth:`forcing` instead.
         """
+        check_level(simplify, "acceleration")
 
         def build() -> sp.ImmutableMatrix:
-            M, f = self._decl.metric, self.forcing()
             if self.is_constrained:
-                lam = self.multipliers(simplify=simplify)
-                acc = constrained_acceleration(M, f, self.constraint_matrix, lam, simplify)
-            else:
-                acc = solve_spd(M, f, simplify)
-            return sp.ImmutableMatrix(acc)
+                return self._constrained(simplify)[0]
+            return sp.ImmutableMatrix(solve_spd(self._decl.metric, self.forcing(), simplify))
 
         return self._cached(("acceleration", simplify), build)
 
