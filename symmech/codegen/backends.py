@@ -2,7 +2,8 @@
 
 Adding a backend is a recipe (SymForce style):
 
-1. a printer subclassing a sympy code printer, in :mod:`symmech.codegen.printers`;
+1. a printer subclassing a sympy code printer, in :mod:`symmech.codegen.printers`, and a
+   :class:`~symmech.codegen.unroll.Dialect` printing the unrolled linear algebra;
 2. a template folder ``templates/<name>/`` with a module template and
    ``function/FUNCTION.<ext>.jinja``, holding loops and conditionals only;
 3. a :class:`Backend` entry in :data:`BACKENDS` naming the templates and output files.
@@ -26,6 +27,7 @@ import jinja2.meta
 import sympy as sp
 
 from symmech.codegen.printers import SymmechCPrinter, SymmechNumPyPrinter
+from symmech.codegen.unroll import CDialect, Dialect, NumPyDialect
 
 __all__ = ["BACKENDS", "STEP_DOCS", "Backend", "environment", "template_root", "templates_used"]
 
@@ -52,13 +54,15 @@ class Backend:
 
     ``templates`` are (template path, output file name pattern) pairs; the pattern is
     formatted with ``stem`` (``symmech_<scene>``).  ``make_printer(names)`` returns the
-    expression printer for a name table.
+    expression printer for a name table; ``dialect`` prints the unrolled linear-algebra
+    steps (:mod:`symmech.codegen.unroll`).
     """
 
     name: str
     templates: tuple[tuple[str, str], ...]
     function_template: str
     make_printer: Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer]
+    dialect: Dialect
     description: str
 
     def template_dir(self) -> Path:
@@ -74,6 +78,7 @@ BACKENDS: dict[str, Backend] = {
         templates=(("c/header.h.jinja", "{stem}.h"), ("c/source.c.jinja", "{stem}.c")),
         function_template="c/function/FUNCTION.c.jinja",
         make_printer=SymmechCPrinter,
+        dialect=CDialect(),
         description="C99, compiled with the system compiler and loaded with ctypes",
     ),
     "numpy": Backend(
@@ -81,6 +86,7 @@ BACKENDS: dict[str, Backend] = {
         templates=(("numpy/module.py.jinja", "{stem}.py"),),
         function_template="numpy/function/FUNCTION.py.jinja",
         make_printer=SymmechNumPyPrinter,
+        dialect=NumPyDialect(),
         description="a NumPy module, vectorised over leading axes",
     ),
 }

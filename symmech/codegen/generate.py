@@ -115,7 +115,9 @@ def generate(
     done: dict[str, LoweredFunction] = {}
     for f in plan.functions:
         callee = done[f.calls] if f.calls is not None else None
-        done[f.name] = lower(f, plan, names, backend.make_printer, cse=cse, callee=callee)
+        done[f.name] = lower(
+            f, plan, names, backend.make_printer, dialect=backend.dialect, cse=cse, callee=callee
+        )
     lowered = tuple(done.values())
     omitted = (*plan.omitted, *_argument_notes(plan, lowered))
     scene_id = identifier(scene.name, "", set())

@@ -13,8 +13,9 @@ shape; C marks one it does not read ``(void)``) and, only when it reads them, th
 run-time parameters ``p``, the time ``t`` and the inputs ``u`` (``rhs`` takes those its
 call of ``acceleration`` needs).
 
-Linear-algebra steps (:data:`~symmech.codegen.plan.STEPS`), implemented once per backend
-in its ``linalg`` template, all with Cholesky factorisations ``A = L L^T``:
+Linear-algebra steps (:data:`~symmech.codegen.plan.STEPS`), all with Cholesky
+factorisations ``A = L L^T``, unrolled into each function (:mod:`symmech.codegen.unroll`)
+and printed by the backend's :class:`~symmech.codegen.unroll.Dialect`:
 
 ``spd_solve``                 ``out = M^-1 f``
 ``constrained_acceleration``  ``X = M^-1 [mu^T | f]``, ``C = mu X_mu``,
@@ -26,8 +27,12 @@ in its ``linalg`` template, all with Cholesky factorisations ``A = L L^T``:
                               (the impulse-momentum system of the Carnot paper, eqs. 6,
                               15 and 20, by its Schur complement)
 
-:func:`step_flops` counts the floating-point operations of each step as the templates
-write it; the header of every function states them next to its operation count.
+The steps are unrolled at generation time into straight-line code over the entries that
+are not exact constants (:mod:`symmech.codegen.unroll`: same operations in the same order
+as the loop algorithms, minus those whose result IEEE arithmetic fixes in advance, such as
+products with a structural zero); :func:`step_flops` counts the operations of the loop
+algorithm on a dense problem, the header of every function states the operations its
+unrolled code performs (``solve_flops``).
 """
 
 from __future__ import annotations
@@ -38,7 +43,14 @@ from dataclasses import dataclass
 import sympy as sp
 
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
-from symmech.codegen.printers import fold_numbers, identifier, product_power, safe_rewrite
+from symmech.codegen.printers import (
+    correctly_rounded,
+    fold_numbers,
+    identifier,
+    product_power,
+    safe_rewrite,
+)
+from symmech.codegen.unroll import STEP_INPUTS, Dialect, trace_step
 from symmech.declaration.symbols import t as TIME
 
 __all__ = ["LoweredFunction", "Names", "comment_text", "lower", "step_flops"]
@@ -103,7 +115,8 @@ class LoweredFunction:
     out_size: int
     operations: int
     n_temporaries: int
-    solve_flops: int = 0  # of the step, see step_flops
+    solve_flops: int = 0  # operations of the unrolled step (symmech.codegen.unroll)
+    solve: tuple[str, ...] = ()  # the unrolled step as printed lines (inputs, checks, out)
     cost: str = ""  # the header's cost line: operations, temporaries, solve, call
     expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
 
@@ -138,7 +151,10 @@ def _factor_solve_flops(n: int, diag: int, r: int) -> int:
 
 def step_flops(step: str | None, args: tuple[int, ...]) -> int:
     """Floating-point operations (+ - * / sqrt, one each) of a linear-algebra step as the
-    templates write it, for the sizes ``args`` of :class:`~symmech.codegen.plan.FunctionPlan`.
+    loop algorithm performs it on a dense problem with the sizes ``args`` of
+    :class:`~symmech.codegen.plan.FunctionPlan`: an upper bound of what the unrolled code
+    of :mod:`symmech.codegen.unroll` performs (it skips the operations on constants and,
+    in C = mu X_mu and G = A Y, the upper triangle that the factorisation never reads).
 
     ``spd_solve`` (n, diag): factor and one solve.  ``constrained_*`` (n, m, diag): factor,
     a solve with m + 1 columns, ``C = mu X_mu`` (2 n m^2) and ``mu X_f`` (2 n m), the
@@ -226,17 +242,25 @@ def _name_power_bases(
     return out, new_exprs
 
 
+def _constant(e: sp.Expr) -> float | None:
+    """The double of a symbol-free entry (as the printed literal evaluates: rationals and
+    folded numbers are correctly rounded), or None for a run-time value."""
+    return correctly_rounded(e) if e.is_number else None
+
+
 def lower(
     f: FunctionPlan,
     plan: ScenePlan,
     names: Names,
     make_printer: Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer],
     *,
+    dialect: Dialect,
     cse: bool = True,
     callee: LoweredFunction | None = None,
 ) -> LoweredFunction:
-    """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer);
-    ``callee`` is the lowered function that ``f`` calls (``rhs``: ``acceleration``)."""
+    """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer,
+    ``dialect`` prints its unrolled linear algebra); ``callee`` is the lowered function
+    that ``f`` calls (``rhs``: ``acceleration``)."""
     if f.calls is not None and (callee is None or callee.name != f.calls):
         raise CodegenError(f"{f.name} calls {f.calls}: lower it first and pass it as callee")
     entries: list[sp.Expr] = []
@@ -261,6 +285,22 @@ def lower(
             else:
                 idx = divmod(flat, b.shape[1])
             where.append((b.name, flat, tuple(idx)))
+    program = None
+    if f.step is not None:
+        # unroll the step over the structure of its inputs, then keep only the entries
+        # it reads (they become locals; constants are folded into the unrolled code)
+        shapes = {b.name: b.shape for b in f.blocks}
+        structure: dict[str, tuple[tuple[int, ...], list[float | None]]] = {
+            name: (shapes[name], []) for name in STEP_INPUTS[f.step]
+        }
+        for (blk, _, _), e in zip(where, entries, strict=True):
+            if blk in structure:
+                structure[blk][1].append(_constant(e))
+        program = trace_step(f.step, f.step_args, structure)
+        needed = {(i.block, i.flat) for i in program.inputs}
+        keep = [i for i, (blk, flat, _) in enumerate(where) if (blk, flat) in needed]
+        entries = [entries[i] for i in keep]
+        where = [where[i] for i in keep]
     nonconst = [i for i, e in enumerate(entries) if not e.is_number]
     symbols = sp.numbered_symbols("tmp", real=True)
     if cse and nonconst:
@@ -285,7 +325,7 @@ def lower(
             raise CodegenError(f"{f.name}: cannot print {e}: {exc}") from None
 
     temporaries = tuple((s.name, pr(e)) for s, e in replacements)
-    assignments = tuple(
+    printed = tuple(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
     )
     ops = int(
@@ -300,20 +340,39 @@ def lower(
     used = {names.table[s] for s in used_syms if s in names.table}
     unpack = _unpack_entries(names, used)
     read = {k for k, _, _ in unpack}
-    if f.step == "impact_kkt":
-        read.add("v")
+    solve: tuple[str, ...] = ()
+    flops = 0
+    if program is not None:
+        exprs = {(blk, flat): text for blk, flat, text, _ in printed}
+        solve = tuple(dialect.lines(program, f.out_shape, exprs))
+        flops = program.flops
+        if program.reads_state("v"):
+            read.add("v")
+        assignments: tuple[tuple[str, int, str, tuple[int, ...]], ...] = ()
+        blocks: tuple[tuple[str, int], ...] = ()
+        block_shapes: tuple[tuple[str, tuple[int, ...]], ...] = ()
+    else:
+        assignments = printed
+        blocks = tuple((b.name, b.size) for b in f.blocks if b.name != "out")
+        block_shapes = tuple((b.name, b.shape) for b in f.blocks)
     if f.calls is not None:
         read |= {"q", "v"}
     unused = tuple(arg for arg in f.state if arg != "y" and arg not in read)
-    takes_p, takes_t, takes_u = f.uses_parameters, f.uses_time, f.uses_inputs
+    # the arguments p, t, u are taken when the printed code reads them (an unrolled solve
+    # may read fewer than the plan's blocks mention) or the callee does
+    takes_p = any(name in used for name in names.p)
+    takes_t = "t" in used
+    takes_u = any(name in used for name in names.u)
     if callee is not None:
         takes_p |= callee.takes_parameters
         takes_t |= callee.takes_time
         takes_u |= callee.takes_inputs
-    flops = step_flops(f.step, f.step_args)
     cost = f"Operations after CSE: {ops} (sympy.count_ops); temporaries: {len(replacements)}"
     if f.step:
-        cost += f"; solve: {flops} flops ({_step_sizes(f.step, f.step_args)})"
+        cost += (
+            f"; solve: {flops} flops ({_step_sizes(f.step, f.step_args)}; dense:"
+            f" {step_flops(f.step, f.step_args)})"
+        )
     if callee is not None:
         cost += f"; then the call of {callee.name}: {callee.operations} operations"
         if callee.solve_flops:
@@ -332,9 +391,9 @@ def lower(
         unpack=unpack,
         unused=unused,
         temporaries=temporaries,
-        blocks=tuple((b.name, b.size) for b in f.blocks if b.name != "out"),
+        blocks=blocks,
         assignments=assignments,
-        block_shapes=tuple((b.name, b.shape) for b in f.blocks),
+        block_shapes=block_shapes,
         step=f.step,
         step_args=f.step_args,
         calls=f.calls,
@@ -343,6 +402,7 @@ def lower(
         operations=ops,
         n_temporaries=len(replacements),
         solve_flops=flops,
+        solve=solve,
         cost=cost + ".",
         expressions=tuple(e for _, e in replacements) + tuple(final),
     )

@@ -46,7 +46,10 @@ if TYPE_CHECKING:
 
 __all__ = ["NumericalError", "SceneModule", "load_generated"]
 
-_STATUS = {1: "a matrix that must be positive definite is not", 2: "an output is not finite"}
+_STATUS = {
+    1: "a matrix that must be positive definite is not",
+    2: "an output, or an input of its linear solve, is not finite",
+}
 
 Raw = Callable[[tuple[np.ndarray, ...], Any, Any, Any], np.ndarray]
 #: A fast single-state caller: the output, or None when the arguments are not the plain
@@ -271,6 +274,8 @@ def _numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
                 out = np.asarray(fn(*args), dtype=np.float64)
         except np.linalg.LinAlgError:
             raise _failed(spec.name, None, _STATUS[1]) from None
+        except FloatingPointError:  # _require_finite: an input of the linear solve
+            raise _failed(spec.name, None, _STATUS[2]) from None
         bad = ~np.isfinite(out)
         if bad.any():
             lead = out.shape[: out.ndim - len(shape_out)]

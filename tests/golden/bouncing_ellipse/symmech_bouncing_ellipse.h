@@ -12,8 +12,9 @@
  *   p[4]  parameters (I, a, b, m)
  *
  * Every function returns SYMMECH_OK (0), SYMMECH_NOT_SPD when a matrix that must be
- * positive definite is not (numerically), or SYMMECH_NONFINITE when an output is NaN or
- * infinite.  Each *_batch function evaluates `count` states (state arrays of
+ * positive definite is not (numerically), or SYMMECH_NONFINITE when an output, or a
+ * run-time input of a linear solve, is NaN or infinite.  Each *_batch function
+ * evaluates `count` states (state arrays of
  * `count` rows; p is shared) and returns 0, or 1 + the index of the first failing state.
  *
  * Left out of this file:

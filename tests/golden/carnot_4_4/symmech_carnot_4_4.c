@@ -14,148 +14,6 @@ static int sm_check_finite(int size, const double *x)
     }
     return SYMMECH_OK;
 }
-
-/*
- * Cholesky factorisation A = L L^T in place, A n x n row-major: L below the diagonal and,
- * on the diagonal, the reciprocals 1/L_jj (so the solves multiply instead of divide).
- */
-static int sm_cholesky(int n, double *A)
-{
-    for (int j = 0; j < n; ++j) {
-        double d = A[j*n + j];
-        for (int k = 0; k < j; ++k) d -= A[j*n + k]*A[j*n + k];
-        if (!(d > 0.0)) return SYMMECH_NOT_SPD;
-        const double inv = 1.0/sqrt(d);
-        A[j*n + j] = inv;
-        for (int i = j + 1; i < n; ++i) {
-            double s = A[i*n + j];
-            for (int k = 0; k < j; ++k) s -= A[i*n + k]*A[j*n + k];
-            A[i*n + j] = s*inv;
-        }
-    }
-    return SYMMECH_OK;
-}
-
-/* Solve L L^T X = B in place; B is n x r row-major, L from sm_cholesky. */
-static void sm_cholesky_solve(int n, int r, const double *L, double *B)
-{
-    for (int c = 0; c < r; ++c) {
-        for (int i = 0; i < n; ++i) {
-            double s = B[i*r + c];
-            for (int k = 0; k < i; ++k) s -= L[i*n + k]*B[k*r + c];
-            B[i*r + c] = s*L[i*n + i];
-        }
-        for (int i = n - 1; i >= 0; --i) {
-            double s = B[i*r + c];
-            for (int k = i + 1; k < n; ++k) s -= L[k*n + i]*B[k*r + c];
-            B[i*r + c] = s*L[i*n + i];
-        }
-    }
-}
-
-/* Factor the metric: Cholesky, or for a structurally diagonal M (diag = 1) only a check
- * that its diagonal is positive (the solve then divides by it: one rounding per entry). */
-static int sm_factor(int n, int diag, double *M)
-{
-    if (!diag) return sm_cholesky(n, M);
-    for (int j = 0; j < n; ++j) {
-        if (!(M[j*n + j] > 0.0)) return SYMMECH_NOT_SPD;
-    }
-    return SYMMECH_OK;
-}
-
-/* Solve M X = B in place for M factored by sm_factor; B is n x r row-major. */
-static void sm_factor_solve(int n, int diag, int r, const double *L, double *B)
-{
-    if (!diag) {
-        sm_cholesky_solve(n, r, L, B);
-        return;
-    }
-    for (int i = 0; i < n; ++i) {
-        const double d = L[i*n + i];
-        for (int c = 0; c < r; ++c) B[i*r + c] /= d;
-    }
-}
-
-/*
- * Constrained dynamics (Carnot paper, section 2.2): X = M^-1 [mu^T | f] (n x (m+1)),
- * C = mu M^-1 mu^T, lambda = C^-1 (-rate - mu M^-1 f), acc = M^-1 (f + mu^T lambda).
- * M (n x n) and the work arrays X, C are overwritten; acc may be 0 (multipliers only).
- */
-static int sm_constrained(int n, int m, int diag, double *M, const double *f, const double *mu,
-                          const double *rate, double *X, double *C, double *lam, double *acc)
-{
-    const int r = m + 1;
-    int status = sm_factor(n, diag, M);
-    if (status != SYMMECH_OK) return status;
-    for (int i = 0; i < n; ++i) {
-        for (int a = 0; a < m; ++a) X[i*r + a] = mu[a*n + i];
-        X[i*r + m] = f[i];
-    }
-    sm_factor_solve(n, diag, r, M, X);
-    for (int a = 0; a < m; ++a) {
-        double s = -rate[a];
-        for (int i = 0; i < n; ++i) s -= mu[a*n + i]*X[i*r + m];
-        lam[a] = s;
-        for (int b = 0; b < m; ++b) {
-            double c = 0.0;
-            for (int i = 0; i < n; ++i) c += mu[a*n + i]*X[i*r + b];
-            C[a*m + b] = c;
-        }
-    }
-    status = sm_cholesky(m, C);
-    if (status != SYMMECH_OK) return status;
-    sm_cholesky_solve(m, 1, C, lam);
-    if (acc) {
-        for (int i = 0; i < n; ++i) {
-            double s = X[i*r + m];
-            for (int a = 0; a < m; ++a) s += X[i*r + a]*lam[a];
-            acc[i] = s;
-        }
-    }
-    return SYMMECH_OK;
-}
-
-/*
- * Newton impact by the impulse-momentum (KKT) system (Carnot paper eqs. 6, 15, 20):
- * g (v+ - v) = A^T lambda with A = [mu (m rows); dpsi; nu] (k x n) and
- * mu v+ = 0, dpsi v+ + psi_t = -alpha (dpsi v + psi_t), nu (v+ - V) = 0, where
- * V = -psi_t grad psi / g(grad psi, grad psi).  Schur complement: Y = M^-1 A^T,
- * G = A Y, lambda = G^-1 (b - A v), v+ = v + Y lambda.
- */
-static int sm_impact_kkt(int n, int k, int m, int diag, double *M, const double *A,
-                         double alpha, double psi_t, const double *v, double *Y, double *G,
-                         double *r, double *out)
-{
-    int status = sm_factor(n, diag, M);
-    if (status != SYMMECH_OK) return status;
-    for (int i = 0; i < n; ++i) {
-        for (int a = 0; a < k; ++a) Y[i*k + a] = A[a*n + i];
-    }
-    sm_factor_solve(n, diag, k, M, Y);
-    for (int a = 0; a < k; ++a) {
-        double av = 0.0;
-        for (int i = 0; i < n; ++i) av += A[a*n + i]*v[i];
-        r[a] = -av;
-        for (int b = 0; b < k; ++b) {
-            double c = 0.0;
-            for (int i = 0; i < n; ++i) c += A[a*n + i]*Y[i*k + b];
-            G[a*k + b] = c;
-        }
-    }
-    /* r[m] = -dpsi(v) so far; the wall row is b_m - dpsi(v) = -(1 + alpha)(dpsi(v) + psi_t) */
-    r[m] = (1.0 + alpha)*(r[m] - psi_t);
-    for (int a = m + 1; a < k; ++a) r[a] += -psi_t*G[a*k + m]/G[m*k + m];
-    status = sm_cholesky(k, G);
-    if (status != SYMMECH_OK) return status;
-    sm_cholesky_solve(k, 1, G, r);
-    for (int i = 0; i < n; ++i) {
-        double s = v[i];
-        for (int a = 0; a < k; ++a) s += Y[i*k + a]*r[a];
-        out[i] = s;
-    }
-    return SYMMECH_OK;
-}
 /*
  * mass_matrix: kinetic metric g(q) in the velocity basis
  *   T = 1/2 v^T g v
@@ -246,8 +104,8 @@ long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double 
 /*
  * acceleration: acceleration v_dot, constrained system solved in the code
  *   g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)
- * Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 239 flops (n = 6, m = 3, diagonal metric).
- * Then Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f), out = M^-1 (f + mu^T lambda).
+ * Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 6 flops (n = 6, m = 3, diagonal metric; dense: 239).
+ * Then Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f), out = M^-1 (f + mu^T lambda), unrolled (straight-line code, constants folded).
  * Output: 6 doubles.
  */
 int symmech_carnot_4_4_acceleration(const double *q, const double *v, const double *p, double *out)
@@ -257,78 +115,27 @@ int symmech_carnot_4_4_acceleration(const double *q, const double *v, const doub
     const double p_k = p[1];
     const double p_r = p[2];
     const double tmp0 = (p_k*p_k);
-    double M[36];
-    double f[6];
-    double mu[18];
-    double rate[3];
-    M[0] = 1.0;
-    M[1] = 0.0;
-    M[2] = 0.0;
-    M[3] = 0.0;
-    M[4] = 0.0;
-    M[5] = 0.0;
-    M[6] = 0.0;
-    M[7] = 1.0;
-    M[8] = 0.0;
-    M[9] = 0.0;
-    M[10] = 0.0;
-    M[11] = 0.0;
-    M[12] = 0.0;
-    M[13] = 0.0;
-    M[14] = 1.0;
-    M[15] = 0.0;
-    M[16] = 0.0;
-    M[17] = 0.0;
-    M[18] = 0.0;
-    M[19] = 0.0;
-    M[20] = 0.0;
-    M[21] = tmp0;
-    M[22] = 0.0;
-    M[23] = 0.0;
-    M[24] = 0.0;
-    M[25] = 0.0;
-    M[26] = 0.0;
-    M[27] = 0.0;
-    M[28] = tmp0;
-    M[29] = 0.0;
-    M[30] = 0.0;
-    M[31] = 0.0;
-    M[32] = 0.0;
-    M[33] = 0.0;
-    M[34] = 0.0;
-    M[35] = tmp0;
-    f[0] = 0.0;
-    f[1] = 0.0;
-    f[2] = 0.0;
-    f[3] = 0.0;
-    f[4] = 0.0;
-    f[5] = 0.0;
-    mu[0] = 1.0;
-    mu[1] = 0.0;
-    mu[2] = 0.0;
-    mu[3] = 0.0;
-    mu[4] = -p_r;
-    mu[5] = 0.0;
-    mu[6] = 0.0;
-    mu[7] = 1.0;
-    mu[8] = 0.0;
-    mu[9] = p_r;
-    mu[10] = 0.0;
-    mu[11] = 0.0;
-    mu[12] = 0.0;
-    mu[13] = 0.0;
-    mu[14] = 1.0;
-    mu[15] = 0.0;
-    mu[16] = 0.0;
-    mu[17] = 0.0;
-    rate[0] = 0.0;
-    rate[1] = 0.0;
-    rate[2] = 0.0;
-    double X[24];
-    double C[9];
-    double lam[3];
-    int status = sm_constrained(6, 3, 1, M, f, mu, rate, X, C, lam, out);
-    if (status != SYMMECH_OK) return status;
+    const double M3_3 = tmp0;
+    const double M4_4 = tmp0;
+    const double M5_5 = tmp0;
+    const double mu0_4 = -p_r;
+    const double mu1_3 = p_r;
+    if (!(isfinite(M3_3) && isfinite(M4_4) && isfinite(M5_5) && isfinite(mu1_3) && isfinite(mu0_4))) return SYMMECH_NONFINITE;
+    if (!(M3_3 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M4_4 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M5_5 > 0.0)) return SYMMECH_NOT_SPD;
+    const double X3_1 = mu1_3/M3_3;
+    const double X4_0 = mu0_4/M4_4;
+    const double C0_0 = 1.0 + mu0_4*X4_0;
+    const double C1_1 = 1.0 + mu1_3*X3_1;
+    if (!(C0_0 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(C1_1 > 0.0)) return SYMMECH_NOT_SPD;
+    out[0] = 0.0;
+    out[1] = 0.0;
+    out[2] = 0.0;
+    out[3] = 0.0;
+    out[4] = 0.0;
+    out[5] = 0.0;
     return sm_check_finite(6, out);
 }
 
@@ -344,7 +151,7 @@ long symmech_carnot_4_4_acceleration_batch(long count, const double *q, const do
 /*
  * rhs: first-order system y = (q, v): y_dot = (q_dot, v_dot)
  *   q_dot = S(q) v, v_dot = acceleration(q, v)
- * Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 2 operations + 239 flops.
+ * Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 2 operations + 6 flops.
  * Then out[6:] = acceleration(q, v).
  * Output: 12 doubles.
  */
@@ -419,8 +226,8 @@ long symmech_carnot_4_4_energy_batch(long count, const double *q, const double *
 /*
  * multipliers: Lagrange multipliers lambda, solved in the code
  *   lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)
- * Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 203 flops (n = 6, m = 3, diagonal metric).
- * Then Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f).
+ * Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 6 flops (n = 6, m = 3, diagonal metric; dense: 203).
+ * Then Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f), unrolled (straight-line code, constants folded).
  * Output: 3 doubles.
  */
 int symmech_carnot_4_4_multipliers(const double *q, const double *v, const double *p, double *out)
@@ -430,77 +237,24 @@ int symmech_carnot_4_4_multipliers(const double *q, const double *v, const doubl
     const double p_k = p[1];
     const double p_r = p[2];
     const double tmp0 = (p_k*p_k);
-    double M[36];
-    double f[6];
-    double mu[18];
-    double rate[3];
-    M[0] = 1.0;
-    M[1] = 0.0;
-    M[2] = 0.0;
-    M[3] = 0.0;
-    M[4] = 0.0;
-    M[5] = 0.0;
-    M[6] = 0.0;
-    M[7] = 1.0;
-    M[8] = 0.0;
-    M[9] = 0.0;
-    M[10] = 0.0;
-    M[11] = 0.0;
-    M[12] = 0.0;
-    M[13] = 0.0;
-    M[14] = 1.0;
-    M[15] = 0.0;
-    M[16] = 0.0;
-    M[17] = 0.0;
-    M[18] = 0.0;
-    M[19] = 0.0;
-    M[20] = 0.0;
-    M[21] = tmp0;
-    M[22] = 0.0;
-    M[23] = 0.0;
-    M[24] = 0.0;
-    M[25] = 0.0;
-    M[26] = 0.0;
-    M[27] = 0.0;
-    M[28] = tmp0;
-    M[29] = 0.0;
-    M[30] = 0.0;
-    M[31] = 0.0;
-    M[32] = 0.0;
-    M[33] = 0.0;
-    M[34] = 0.0;
-    M[35] = tmp0;
-    f[0] = 0.0;
-    f[1] = 0.0;
-    f[2] = 0.0;
-    f[3] = 0.0;
-    f[4] = 0.0;
-    f[5] = 0.0;
-    mu[0] = 1.0;
-    mu[1] = 0.0;
-    mu[2] = 0.0;
-    mu[3] = 0.0;
-    mu[4] = -p_r;
-    mu[5] = 0.0;
-    mu[6] = 0.0;
-    mu[7] = 1.0;
-    mu[8] = 0.0;
-    mu[9] = p_r;
-    mu[10] = 0.0;
-    mu[11] = 0.0;
-    mu[12] = 0.0;
-    mu[13] = 0.0;
-    mu[14] = 1.0;
-    mu[15] = 0.0;
-    mu[16] = 0.0;
-    mu[17] = 0.0;
-    rate[0] = 0.0;
-    rate[1] = 0.0;
-    rate[2] = 0.0;
-    double X[24];
-    double C[9];
-    int status = sm_constrained(6, 3, 1, M, f, mu, rate, X, C, out, 0);
-    if (status != SYMMECH_OK) return status;
+    const double M3_3 = tmp0;
+    const double M4_4 = tmp0;
+    const double M5_5 = tmp0;
+    const double mu0_4 = -p_r;
+    const double mu1_3 = p_r;
+    if (!(isfinite(M3_3) && isfinite(M4_4) && isfinite(M5_5) && isfinite(mu1_3) && isfinite(mu0_4))) return SYMMECH_NONFINITE;
+    if (!(M3_3 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M4_4 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M5_5 > 0.0)) return SYMMECH_NOT_SPD;
+    const double X3_1 = mu1_3/M3_3;
+    const double X4_0 = mu0_4/M4_4;
+    const double C0_0 = 1.0 + mu0_4*X4_0;
+    const double C1_1 = 1.0 + mu1_3*X3_1;
+    if (!(C0_0 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(C1_1 > 0.0)) return SYMMECH_NOT_SPD;
+    out[0] = 0.0;
+    out[1] = 0.0;
+    out[2] = 0.0;
     return sm_check_finite(3, out);
 }
 
@@ -619,8 +373,8 @@ long symmech_carnot_4_4_psit_rough_wall_batch(long count, const double *q, const
 /*
  * impact_rough_wall: post-impact velocity at wall 'rough_wall' (Newton law, KKT solved in the code)
  *   g (v+ - v-) = A^T lambda, A = [mu; dpsi; nu]; mu v+ = 0, dpsi v+ + psi_t = -alpha (dpsi v- + psi_t), nu (v+ - V) = 0 (Carnot paper eqs. 6, 15, 20)
- * Operations after CSE: 3 (sympy.count_ops); temporaries: 2; solve: 566 flops (n = 6, k = 5, diagonal metric).
- * Then the impulse-momentum system by Cholesky solves of M and of G = A M^-1 A^T: out = v + M^-1 A^T G^-1 (b - A v).
+ * Operations after CSE: 3 (sympy.count_ops); temporaries: 2; solve: 57 flops (n = 6, k = 5, diagonal metric; dense: 566).
+ * Then the impulse-momentum system by Cholesky solves of M and of G = A M^-1 A^T: out = v + M^-1 A^T G^-1 (b - A v), unrolled (straight-line code, constants folded).
  * Output: 6 doubles.
  */
 int symmech_carnot_4_4_impact_rough_wall(const double *q, const double *v, const double *p, const double *u, double *out)
@@ -632,82 +386,50 @@ int symmech_carnot_4_4_impact_rough_wall(const double *q, const double *v, const
     const double u_Derivative_f_t_t = u[1];
     const double tmp0 = (p_k*p_k);
     const double tmp1 = -p_r;
-    double M[36];
-    double A[30];
-    double s[2];
-    M[0] = 1.0;
-    M[1] = 0.0;
-    M[2] = 0.0;
-    M[3] = 0.0;
-    M[4] = 0.0;
-    M[5] = 0.0;
-    M[6] = 0.0;
-    M[7] = 1.0;
-    M[8] = 0.0;
-    M[9] = 0.0;
-    M[10] = 0.0;
-    M[11] = 0.0;
-    M[12] = 0.0;
-    M[13] = 0.0;
-    M[14] = 1.0;
-    M[15] = 0.0;
-    M[16] = 0.0;
-    M[17] = 0.0;
-    M[18] = 0.0;
-    M[19] = 0.0;
-    M[20] = 0.0;
-    M[21] = tmp0;
-    M[22] = 0.0;
-    M[23] = 0.0;
-    M[24] = 0.0;
-    M[25] = 0.0;
-    M[26] = 0.0;
-    M[27] = 0.0;
-    M[28] = tmp0;
-    M[29] = 0.0;
-    M[30] = 0.0;
-    M[31] = 0.0;
-    M[32] = 0.0;
-    M[33] = 0.0;
-    M[34] = 0.0;
-    M[35] = tmp0;
-    A[0] = 1.0;
-    A[1] = 0.0;
-    A[2] = 0.0;
-    A[3] = 0.0;
-    A[4] = tmp1;
-    A[5] = 0.0;
-    A[6] = 0.0;
-    A[7] = 1.0;
-    A[8] = 0.0;
-    A[9] = p_r;
-    A[10] = 0.0;
-    A[11] = 0.0;
-    A[12] = 0.0;
-    A[13] = 0.0;
-    A[14] = 1.0;
-    A[15] = 0.0;
-    A[16] = 0.0;
-    A[17] = 0.0;
-    A[18] = 1.0;
-    A[19] = 0.0;
-    A[20] = 0.0;
-    A[21] = 0.0;
-    A[22] = 0.0;
-    A[23] = 0.0;
-    A[24] = 0.0;
-    A[25] = 1.0;
-    A[26] = 0.0;
-    A[27] = 0.0;
-    A[28] = 0.0;
-    A[29] = tmp1;
-    s[0] = p_alpha;
-    s[1] = -u_Derivative_f_t_t;
-    double Y[30];
-    double G[25];
-    double r[5];
-    int status = sm_impact_kkt(6, 5, 3, 1, M, A, s[0], s[1], v, Y, G, r, out);
-    if (status != SYMMECH_OK) return status;
+    const double M3_3 = tmp0;
+    const double M4_4 = tmp0;
+    const double M5_5 = tmp0;
+    const double A0_4 = tmp1;
+    const double A1_3 = p_r;
+    const double A4_5 = tmp1;
+    const double s0 = p_alpha;
+    const double s1 = -u_Derivative_f_t_t;
+    if (!(isfinite(M3_3) && isfinite(M4_4) && isfinite(M5_5) && isfinite(A1_3) && isfinite(A0_4) && isfinite(A4_5) && isfinite(s0) && isfinite(v[0]) && isfinite(s1) && isfinite(v[1]) && isfinite(v[5]) && isfinite(v[4]) && isfinite(v[3]) && isfinite(v[2]))) return SYMMECH_NONFINITE;
+    if (!(M3_3 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M4_4 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M5_5 > 0.0)) return SYMMECH_NOT_SPD;
+    const double Y3_1 = A1_3/M3_3;
+    const double Y4_0 = A0_4/M4_4;
+    const double Y5_4 = A4_5/M5_5;
+    const double G0_0 = 1.0 + A0_4*Y4_0;
+    const double G1_1 = 1.0 + A1_3*Y3_1;
+    const double G4_4 = 1.0 + A4_5*Y5_4;
+    const double r3 = (1.0 + s0)*((-v[0]) - s1);
+    const double r4 = -(v[1] + A4_5*v[5]);
+    if (!(G0_0 > 0.0)) return SYMMECH_NOT_SPD;
+    const double Lgi0 = 1.0/sqrt(G0_0);
+    if (!(G1_1 > 0.0)) return SYMMECH_NOT_SPD;
+    const double Lgi1 = 1.0/sqrt(G1_1);
+    const double Lgp3 = 1.0 - Lgi0*Lgi0;
+    if (!(Lgp3 > 0.0)) return SYMMECH_NOT_SPD;
+    const double Lgi3 = 1.0/sqrt(Lgp3);
+    const double Lgp4 = G4_4 - Lgi1*Lgi1;
+    if (!(Lgp4 > 0.0)) return SYMMECH_NOT_SPD;
+    const double Lgi4 = 1.0/sqrt(Lgp4);
+    const double r0_0 = (-(v[0] + A0_4*v[4]))*Lgi0;
+    const double r1_0 = (-(v[1] + A1_3*v[3]))*Lgi1;
+    const double r3_0 = (r3 - Lgi0*r0_0)*Lgi3;
+    const double r4_0 = (r4 - Lgi1*r1_0)*Lgi4;
+    const double r4_0_2 = r4_0*Lgi4;
+    const double r3_0_2 = r3_0*Lgi3;
+    const double r1_0_2 = (r1_0 - Lgi1*r4_0_2)*Lgi1;
+    const double r0_0_2 = (r0_0 - Lgi0*r3_0_2)*Lgi0;
+    out[0] = v[0] + r0_0_2 + r3_0_2;
+    out[1] = v[1] + r1_0_2 + r4_0_2;
+    out[2] = v[2] + (-v[2]);
+    out[3] = v[3] + Y3_1*r1_0_2;
+    out[4] = v[4] + Y4_0*r0_0_2;
+    out[5] = v[5] + Y5_4*r4_0_2;
     return sm_check_finite(6, out);
 }
 

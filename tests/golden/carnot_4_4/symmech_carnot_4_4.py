@@ -37,106 +37,16 @@ def _batch_shape(*parts):
     return numpy.broadcast_shapes(*shapes)
 
 
-# Linear algebra: the algorithms of the C code (sm_cholesky, sm_cholesky_solve, sm_factor,
-# sm_factor_solve, ...), with the same operations in the same order, written as loops over
-# the matrix sizes and NumPy operations over the batch axes.
+# The linear-algebra steps (Cholesky factorisations and solves) are unrolled into each
+# function at generation time (symmech/codegen/unroll.py): straight-line code, the same
+# operations in the same order as the C code.
 
 
-def _cholesky(A):
-    """Cholesky factorisation A = L L^T of a batch (..., n, n), as sm_cholesky: L below
-    the diagonal and, on it, the reciprocals 1/L_jj; the strict upper triangle of A is
-    not read.  numpy.linalg.LinAlgError unless every matrix is positive definite."""
-    L = numpy.array(A, dtype=numpy.float64)
-    n = L.shape[-1]
-    for j in range(n):
-        s = L[..., j:, j].copy()
-        for k in range(j):
-            s -= L[..., j:, k] * L[..., j, k, None]
-        d = s[..., 0]
-        if not (d > 0.0).all():
-            raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
-        inv = 1.0 / numpy.sqrt(d)
-        L[..., j, j] = inv
-        L[..., j + 1 :, j] = s[..., 1:] * inv[..., None]
-    return L
-
-
-def _cholesky_solve(L, B):
-    """Solve L L^T X = B, B of shape (..., n, r), as sm_cholesky_solve: forward then back
-    substitution, multiplying by the stored reciprocals of the diagonal."""
-    n = L.shape[-1]
-    X = numpy.array(numpy.broadcast_to(B, numpy.broadcast_shapes(L.shape[:-2], B.shape[:-2]) + B.shape[-2:]))
-    for i in range(n):
-        s = X[..., i, :]
-        for k in range(i):
-            s -= L[..., i, k, None] * X[..., k, :]
-        X[..., i, :] = s * L[..., i, i, None]
-    for i in range(n - 1, -1, -1):
-        s = X[..., i, :]
-        for k in range(i + 1, n):
-            s -= L[..., k, i, None] * X[..., k, :]
-        X[..., i, :] = s * L[..., i, i, None]
-    return X
-
-
-def _factor(M, diag):
-    """sm_factor: the Cholesky factor of the metric, or for a structurally diagonal metric
-    (diag = 1) its diagonal, checked positive."""
-    if not diag:
-        return _cholesky(M)
-    d = numpy.diagonal(M, axis1=-2, axis2=-1)
-    if not (d > 0.0).all():
-        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
-    return d
-
-
-def _factor_solve(L, B, diag):
-    """sm_factor_solve: M^-1 B for M factored by _factor; B of shape (..., n, r)."""
-    if not diag:
-        return _cholesky_solve(L, B)
-    return B / L[..., :, None]
-
-
-def _constrained(M, f, mu, rate, diag):
-    """sm_constrained, (acc, lambda) (Carnot paper section 2.2): X = M^-1 [mu^T | f],
-    C = mu X_mu, lambda = C^-1 (-rate - mu X_f), acc = X_f + X_mu lambda."""
-    m, n = mu.shape[-2], mu.shape[-1]
-    lead = numpy.broadcast_shapes(M.shape[:-2], f.shape[:-1], mu.shape[:-2], rate.shape[:-1])
-    X = numpy.empty(lead + (n, m + 1))
-    X[..., :m] = numpy.swapaxes(mu, -1, -2)
-    X[..., m] = f
-    X = _factor_solve(_factor(M, diag), X, diag)
-    lam = -rate
-    C = 0.0
-    for i in range(n):
-        lam = lam - mu[..., :, i] * X[..., i, m, None]
-        C = C + mu[..., :, i, None] * X[..., i, None, :m]
-    lam = _cholesky_solve(_cholesky(C), lam[..., None])[..., 0]
-    acc = X[..., m]
-    for a in range(m):
-        acc = acc + X[..., :, a] * lam[..., a, None]
-    return acc, lam
-
-
-def _impact_kkt(M, A, s, v, m, diag):
-    """sm_impact_kkt: the Newton impact by the impulse-momentum (KKT) system, Carnot paper
-    eqs. 6, 15, 20: Y = M^-1 A^T, G = A Y, lambda = G^-1 (b - A v), v+ = v + Y lambda."""
-    k, n = A.shape[-2], A.shape[-1]
-    Y = _factor_solve(_factor(M, diag), numpy.swapaxes(A, -1, -2), diag)
-    av = 0.0
-    G = 0.0
-    for i in range(n):
-        av = av + A[..., :, i] * v[..., i, None]
-        G = G + A[..., :, i, None] * Y[..., i, None, :]
-    r = -av
-    alpha, psi_t = s[..., 0], s[..., 1]
-    r[..., m] = (1.0 + alpha) * (r[..., m] - psi_t)
-    r[..., m + 1 :] += -psi_t[..., None] * G[..., m + 1 :, m] / G[..., m, m, None]
-    lam = _cholesky_solve(_cholesky(G), r[..., None])[..., 0]
-    out = v
-    for a in range(k):
-        out = out + Y[..., :, a] * lam[..., a, None]
-    return out
+def _require_finite(*values):
+    """SYMMECH_NONFINITE of the C code: every run-time input of a linear solve is finite."""
+    for value in values:
+        if not numpy.isfinite(value).all():
+            raise FloatingPointError("an input of a linear solve is not finite")
 
 
 def mass_matrix(q, p):
@@ -214,8 +124,8 @@ def acceleration(q, v, p):
     """acceleration v_dot, constrained system solved in the code.
 
     g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)
-    Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 239 flops (n = 6, m = 3, diagonal metric).
-    Then Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f), out = M^-1 (f + mu^T lambda).
+    Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 6 flops (n = 6, m = 3, diagonal metric; dense: 239).
+    Then Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f), out = M^-1 (f + mu^T lambda), unrolled (straight-line code, constants folded).
     Arguments: q, v, p.  Output shape: (...) + (6,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
@@ -224,74 +134,33 @@ def acceleration(q, v, p):
     p_k = p[..., 1]
     p_r = p[..., 2]
     tmp0 = (p_k*p_k)
-    M = numpy.empty(shape + (6, 6))
-    f = numpy.empty(shape + (6,))
-    mu = numpy.empty(shape + (3, 6))
-    rate = numpy.empty(shape + (3,))
-    M[..., 0, 0] = 1.0
-    M[..., 0, 1] = 0.0
-    M[..., 0, 2] = 0.0
-    M[..., 0, 3] = 0.0
-    M[..., 0, 4] = 0.0
-    M[..., 0, 5] = 0.0
-    M[..., 1, 0] = 0.0
-    M[..., 1, 1] = 1.0
-    M[..., 1, 2] = 0.0
-    M[..., 1, 3] = 0.0
-    M[..., 1, 4] = 0.0
-    M[..., 1, 5] = 0.0
-    M[..., 2, 0] = 0.0
-    M[..., 2, 1] = 0.0
-    M[..., 2, 2] = 1.0
-    M[..., 2, 3] = 0.0
-    M[..., 2, 4] = 0.0
-    M[..., 2, 5] = 0.0
-    M[..., 3, 0] = 0.0
-    M[..., 3, 1] = 0.0
-    M[..., 3, 2] = 0.0
-    M[..., 3, 3] = tmp0
-    M[..., 3, 4] = 0.0
-    M[..., 3, 5] = 0.0
-    M[..., 4, 0] = 0.0
-    M[..., 4, 1] = 0.0
-    M[..., 4, 2] = 0.0
-    M[..., 4, 3] = 0.0
-    M[..., 4, 4] = tmp0
-    M[..., 4, 5] = 0.0
-    M[..., 5, 0] = 0.0
-    M[..., 5, 1] = 0.0
-    M[..., 5, 2] = 0.0
-    M[..., 5, 3] = 0.0
-    M[..., 5, 4] = 0.0
-    M[..., 5, 5] = tmp0
-    f[..., 0] = 0.0
-    f[..., 1] = 0.0
-    f[..., 2] = 0.0
-    f[..., 3] = 0.0
-    f[..., 4] = 0.0
-    f[..., 5] = 0.0
-    mu[..., 0, 0] = 1.0
-    mu[..., 0, 1] = 0.0
-    mu[..., 0, 2] = 0.0
-    mu[..., 0, 3] = 0.0
-    mu[..., 0, 4] = -p_r
-    mu[..., 0, 5] = 0.0
-    mu[..., 1, 0] = 0.0
-    mu[..., 1, 1] = 1.0
-    mu[..., 1, 2] = 0.0
-    mu[..., 1, 3] = p_r
-    mu[..., 1, 4] = 0.0
-    mu[..., 1, 5] = 0.0
-    mu[..., 2, 0] = 0.0
-    mu[..., 2, 1] = 0.0
-    mu[..., 2, 2] = 1.0
-    mu[..., 2, 3] = 0.0
-    mu[..., 2, 4] = 0.0
-    mu[..., 2, 5] = 0.0
-    rate[..., 0] = 0.0
-    rate[..., 1] = 0.0
-    rate[..., 2] = 0.0
-    out = _constrained(M, f, mu, rate, 1)[0]
+    M3_3 = tmp0
+    M4_4 = tmp0
+    M5_5 = tmp0
+    mu0_4 = -p_r
+    mu1_3 = p_r
+    _require_finite(M3_3, M4_4, M5_5, mu1_3, mu0_4)
+    if not numpy.all(M3_3 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M4_4 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M5_5 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    X3_1 = mu1_3/M3_3
+    X4_0 = mu0_4/M4_4
+    C0_0 = 1.0 + mu0_4*X4_0
+    C1_1 = 1.0 + mu1_3*X3_1
+    if not numpy.all(C0_0 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(C1_1 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    out = numpy.empty(shape + (6,))
+    out[..., 0] = 0.0
+    out[..., 1] = 0.0
+    out[..., 2] = 0.0
+    out[..., 3] = 0.0
+    out[..., 4] = 0.0
+    out[..., 5] = 0.0
     return out
 
 
@@ -299,7 +168,7 @@ def rhs(y, p):
     """first-order system y = (q, v): y_dot = (q_dot, v_dot).
 
     q_dot = S(q) v, v_dot = acceleration(q, v)
-    Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 2 operations + 239 flops.
+    Operations after CSE: 18 (sympy.count_ops); temporaries: 6; then the call of acceleration: 2 operations + 6 flops.
     Arguments: y, p.  Output shape: (...) + (12,).
     """
     y = numpy.asarray(y, dtype=numpy.float64)
@@ -358,8 +227,8 @@ def multipliers(q, v, p):
     """Lagrange multipliers lambda, solved in the code.
 
     lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)
-    Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 203 flops (n = 6, m = 3, diagonal metric).
-    Then Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f).
+    Operations after CSE: 2 (sympy.count_ops); temporaries: 1; solve: 6 flops (n = 6, m = 3, diagonal metric; dense: 203).
+    Then Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f), unrolled (straight-line code, constants folded).
     Arguments: q, v, p.  Output shape: (...) + (3,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
@@ -368,74 +237,30 @@ def multipliers(q, v, p):
     p_k = p[..., 1]
     p_r = p[..., 2]
     tmp0 = (p_k*p_k)
-    M = numpy.empty(shape + (6, 6))
-    f = numpy.empty(shape + (6,))
-    mu = numpy.empty(shape + (3, 6))
-    rate = numpy.empty(shape + (3,))
-    M[..., 0, 0] = 1.0
-    M[..., 0, 1] = 0.0
-    M[..., 0, 2] = 0.0
-    M[..., 0, 3] = 0.0
-    M[..., 0, 4] = 0.0
-    M[..., 0, 5] = 0.0
-    M[..., 1, 0] = 0.0
-    M[..., 1, 1] = 1.0
-    M[..., 1, 2] = 0.0
-    M[..., 1, 3] = 0.0
-    M[..., 1, 4] = 0.0
-    M[..., 1, 5] = 0.0
-    M[..., 2, 0] = 0.0
-    M[..., 2, 1] = 0.0
-    M[..., 2, 2] = 1.0
-    M[..., 2, 3] = 0.0
-    M[..., 2, 4] = 0.0
-    M[..., 2, 5] = 0.0
-    M[..., 3, 0] = 0.0
-    M[..., 3, 1] = 0.0
-    M[..., 3, 2] = 0.0
-    M[..., 3, 3] = tmp0
-    M[..., 3, 4] = 0.0
-    M[..., 3, 5] = 0.0
-    M[..., 4, 0] = 0.0
-    M[..., 4, 1] = 0.0
-    M[..., 4, 2] = 0.0
-    M[..., 4, 3] = 0.0
-    M[..., 4, 4] = tmp0
-    M[..., 4, 5] = 0.0
-    M[..., 5, 0] = 0.0
-    M[..., 5, 1] = 0.0
-    M[..., 5, 2] = 0.0
-    M[..., 5, 3] = 0.0
-    M[..., 5, 4] = 0.0
-    M[..., 5, 5] = tmp0
-    f[..., 0] = 0.0
-    f[..., 1] = 0.0
-    f[..., 2] = 0.0
-    f[..., 3] = 0.0
-    f[..., 4] = 0.0
-    f[..., 5] = 0.0
-    mu[..., 0, 0] = 1.0
-    mu[..., 0, 1] = 0.0
-    mu[..., 0, 2] = 0.0
-    mu[..., 0, 3] = 0.0
-    mu[..., 0, 4] = -p_r
-    mu[..., 0, 5] = 0.0
-    mu[..., 1, 0] = 0.0
-    mu[..., 1, 1] = 1.0
-    mu[..., 1, 2] = 0.0
-    mu[..., 1, 3] = p_r
-    mu[..., 1, 4] = 0.0
-    mu[..., 1, 5] = 0.0
-    mu[..., 2, 0] = 0.0
-    mu[..., 2, 1] = 0.0
-    mu[..., 2, 2] = 1.0
-    mu[..., 2, 3] = 0.0
-    mu[..., 2, 4] = 0.0
-    mu[..., 2, 5] = 0.0
-    rate[..., 0] = 0.0
-    rate[..., 1] = 0.0
-    rate[..., 2] = 0.0
-    out = _constrained(M, f, mu, rate, 1)[1]
+    M3_3 = tmp0
+    M4_4 = tmp0
+    M5_5 = tmp0
+    mu0_4 = -p_r
+    mu1_3 = p_r
+    _require_finite(M3_3, M4_4, M5_5, mu1_3, mu0_4)
+    if not numpy.all(M3_3 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M4_4 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M5_5 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    X3_1 = mu1_3/M3_3
+    X4_0 = mu0_4/M4_4
+    C0_0 = 1.0 + mu0_4*X4_0
+    C1_1 = 1.0 + mu1_3*X3_1
+    if not numpy.all(C0_0 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(C1_1 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    out = numpy.empty(shape + (3,))
+    out[..., 0] = 0.0
+    out[..., 1] = 0.0
+    out[..., 2] = 0.0
     return out
 
 
@@ -516,8 +341,8 @@ def impact_rough_wall(q, v, p, u):
     """post-impact velocity at wall 'rough_wall' (Newton law, KKT solved in the code).
 
     g (v+ - v-) = A^T lambda, A = [mu; dpsi; nu]; mu v+ = 0, dpsi v+ + psi_t = -alpha (dpsi v- + psi_t), nu (v+ - V) = 0 (Carnot paper eqs. 6, 15, 20)
-    Operations after CSE: 3 (sympy.count_ops); temporaries: 2; solve: 566 flops (n = 6, k = 5, diagonal metric).
-    Then the impulse-momentum system by Cholesky solves of M and of G = A M^-1 A^T: out = v + M^-1 A^T G^-1 (b - A v).
+    Operations after CSE: 3 (sympy.count_ops); temporaries: 2; solve: 57 flops (n = 6, k = 5, diagonal metric; dense: 566).
+    Then the impulse-momentum system by Cholesky solves of M and of G = A M^-1 A^T: out = v + M^-1 A^T G^-1 (b - A v), unrolled (straight-line code, constants folded).
     Arguments: q, v, p, u.  Output shape: (...) + (6,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
@@ -529,76 +354,56 @@ def impact_rough_wall(q, v, p, u):
     u_Derivative_f_t_t = u[..., 1]
     tmp0 = (p_k*p_k)
     tmp1 = -p_r
-    M = numpy.empty(shape + (6, 6))
-    A = numpy.empty(shape + (5, 6))
-    s = numpy.empty(shape + (2,))
-    M[..., 0, 0] = 1.0
-    M[..., 0, 1] = 0.0
-    M[..., 0, 2] = 0.0
-    M[..., 0, 3] = 0.0
-    M[..., 0, 4] = 0.0
-    M[..., 0, 5] = 0.0
-    M[..., 1, 0] = 0.0
-    M[..., 1, 1] = 1.0
-    M[..., 1, 2] = 0.0
-    M[..., 1, 3] = 0.0
-    M[..., 1, 4] = 0.0
-    M[..., 1, 5] = 0.0
-    M[..., 2, 0] = 0.0
-    M[..., 2, 1] = 0.0
-    M[..., 2, 2] = 1.0
-    M[..., 2, 3] = 0.0
-    M[..., 2, 4] = 0.0
-    M[..., 2, 5] = 0.0
-    M[..., 3, 0] = 0.0
-    M[..., 3, 1] = 0.0
-    M[..., 3, 2] = 0.0
-    M[..., 3, 3] = tmp0
-    M[..., 3, 4] = 0.0
-    M[..., 3, 5] = 0.0
-    M[..., 4, 0] = 0.0
-    M[..., 4, 1] = 0.0
-    M[..., 4, 2] = 0.0
-    M[..., 4, 3] = 0.0
-    M[..., 4, 4] = tmp0
-    M[..., 4, 5] = 0.0
-    M[..., 5, 0] = 0.0
-    M[..., 5, 1] = 0.0
-    M[..., 5, 2] = 0.0
-    M[..., 5, 3] = 0.0
-    M[..., 5, 4] = 0.0
-    M[..., 5, 5] = tmp0
-    A[..., 0, 0] = 1.0
-    A[..., 0, 1] = 0.0
-    A[..., 0, 2] = 0.0
-    A[..., 0, 3] = 0.0
-    A[..., 0, 4] = tmp1
-    A[..., 0, 5] = 0.0
-    A[..., 1, 0] = 0.0
-    A[..., 1, 1] = 1.0
-    A[..., 1, 2] = 0.0
-    A[..., 1, 3] = p_r
-    A[..., 1, 4] = 0.0
-    A[..., 1, 5] = 0.0
-    A[..., 2, 0] = 0.0
-    A[..., 2, 1] = 0.0
-    A[..., 2, 2] = 1.0
-    A[..., 2, 3] = 0.0
-    A[..., 2, 4] = 0.0
-    A[..., 2, 5] = 0.0
-    A[..., 3, 0] = 1.0
-    A[..., 3, 1] = 0.0
-    A[..., 3, 2] = 0.0
-    A[..., 3, 3] = 0.0
-    A[..., 3, 4] = 0.0
-    A[..., 3, 5] = 0.0
-    A[..., 4, 0] = 0.0
-    A[..., 4, 1] = 1.0
-    A[..., 4, 2] = 0.0
-    A[..., 4, 3] = 0.0
-    A[..., 4, 4] = 0.0
-    A[..., 4, 5] = tmp1
-    s[..., 0] = p_alpha
-    s[..., 1] = -u_Derivative_f_t_t
-    out = _impact_kkt(M, A, s, v, 3, 1)
+    M3_3 = tmp0
+    M4_4 = tmp0
+    M5_5 = tmp0
+    A0_4 = tmp1
+    A1_3 = p_r
+    A4_5 = tmp1
+    s0 = p_alpha
+    s1 = -u_Derivative_f_t_t
+    _require_finite(M3_3, M4_4, M5_5, A1_3, A0_4, A4_5, s0, v[..., 0], s1, v[..., 1], v[..., 5], v[..., 4], v[..., 3], v[..., 2])
+    if not numpy.all(M3_3 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M4_4 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M5_5 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    Y3_1 = A1_3/M3_3
+    Y4_0 = A0_4/M4_4
+    Y5_4 = A4_5/M5_5
+    G0_0 = 1.0 + A0_4*Y4_0
+    G1_1 = 1.0 + A1_3*Y3_1
+    G4_4 = 1.0 + A4_5*Y5_4
+    r3 = (1.0 + s0)*((-v[..., 0]) - s1)
+    r4 = -(v[..., 1] + A4_5*v[..., 5])
+    if not numpy.all(G0_0 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    Lgi0 = 1.0/numpy.sqrt(G0_0)
+    if not numpy.all(G1_1 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    Lgi1 = 1.0/numpy.sqrt(G1_1)
+    Lgp3 = 1.0 - Lgi0*Lgi0
+    if not numpy.all(Lgp3 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    Lgi3 = 1.0/numpy.sqrt(Lgp3)
+    Lgp4 = G4_4 - Lgi1*Lgi1
+    if not numpy.all(Lgp4 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    Lgi4 = 1.0/numpy.sqrt(Lgp4)
+    r0_0 = (-(v[..., 0] + A0_4*v[..., 4]))*Lgi0
+    r1_0 = (-(v[..., 1] + A1_3*v[..., 3]))*Lgi1
+    r3_0 = (r3 - Lgi0*r0_0)*Lgi3
+    r4_0 = (r4 - Lgi1*r1_0)*Lgi4
+    r4_0_2 = r4_0*Lgi4
+    r3_0_2 = r3_0*Lgi3
+    r1_0_2 = (r1_0 - Lgi1*r4_0_2)*Lgi1
+    r0_0_2 = (r0_0 - Lgi0*r3_0_2)*Lgi0
+    out = numpy.empty(shape + (6,))
+    out[..., 0] = v[..., 0] + r0_0_2 + r3_0_2
+    out[..., 1] = v[..., 1] + r1_0_2 + r4_0_2
+    out[..., 2] = v[..., 2] + (-v[..., 2])
+    out[..., 3] = v[..., 3] + Y3_1*r1_0_2
+    out[..., 4] = v[..., 4] + Y4_0*r0_0_2
+    out[..., 5] = v[..., 5] + Y5_4*r4_0_2
     return out
