@@ -41,7 +41,11 @@ machine, measured in the same run by a C kernel of 12 independent multiply-add c
 (gcc -O2 -fno-tree-vectorize: the generated batch code evaluates one state at a time).
 C/bound is the measured C batch time over that bound (issue 4 target: <= 3).  A second
 bound counts each libm call of the C function (sin, cos, hypot, ...) at its cost
-measured in the same run (a throughput kernel per function) instead of one flop.
+measured in the same run (a throughput kernel per function) instead of one flop.  A third
+bound, the roofline, also charges each division its measured cost and takes the larger of
+that compute time and the memory time of the state: the bytes of the state arrays the
+function reads and of its output, at the streaming rate of a C copy kernel measured in the
+same run (a batch of a few flops per state is limited by memory, not arithmetic).
 
 All ratios are "baseline / symmech" for times and operation counts and "symmech /
 baseline" for throughput, so a ratio > 1 always means symmech is better.  Figures are
@@ -190,6 +194,25 @@ double bench_flop_kernel(long iters, double x, double c, double d)
 """
 
 
+_STREAM = r"""
+double bench_stream(long n, const double *a, double *b)
+{
+    for (long i = 0; i < n; ++i) b[i] = a[i]*1.0000001;
+    return b[n - 1];
+}
+
+double bench_div(long iters, const double *x)
+{
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+    for (long i = 0; i < iters; i += 4) {
+        s0 += 1.0/x[i & 1023]; s1 += 1.0/x[(i + 1) & 1023];
+        s2 += 1.0/x[(i + 2) & 1023]; s3 += 1.0/x[(i + 3) & 1023];
+    }
+    return s0 + s1 + s2 + s3;
+}
+"""
+
+
 def _libm_kernel(name: str) -> str:
     """Four independent sums of name(x) over 1024 arguments in [0.1, 0.9] (throughput)."""
     arg = (
@@ -234,6 +257,11 @@ class Machine:
             fn.restype = ctypes.c_double
             self._libm[name] = fn
         self._x = np.linspace(0.1, 0.9, 1024)
+        lib = _compile(compiler, folder, _STREAM, "stream_kernel")
+        self._stream, self._div = lib.bench_stream, lib.bench_div
+        self._stream.argtypes = [ctypes.c_long, ctypes.c_void_p, ctypes.c_void_p]
+        self._div.argtypes = [ctypes.c_long, ctypes.c_void_p]
+        self._stream.restype = self._div.restype = ctypes.c_double
 
     def rate(self) -> float:
         """Scalar double flops/s: 24 flops per iteration of the kernel, best of 3."""
@@ -253,6 +281,21 @@ class Machine:
             best = min(timeit.repeat(lambda fn=fn: fn(iters, ptr), number=1, repeat=3))
             out[name] = best / iters
         return out
+
+    def bandwidth(self) -> float:
+        """Bytes/s read plus written by a copy kernel over 2 x 128 MB (best of 3)."""
+        n = 16 * 1024 * 1024
+        a, b = np.ones(n), np.zeros(n)
+        best = min(
+            timeit.repeat(lambda: self._stream(n, a.ctypes.data, b.ctypes.data), number=1, repeat=3)
+        )
+        return 16 * n / best
+
+    def division(self) -> float:
+        """Seconds per double division (throughput, best of 3)."""
+        iters = 1_000_000
+        ptr = self._x.ctypes.data
+        return min(timeit.repeat(lambda: self._div(iters, ptr), number=1, repeat=3)) / iters
 
 
 def blas_flop_rate() -> float:
@@ -476,8 +519,11 @@ class Row:
     rate: dict[str, float] = field(default_factory=dict)  # c, numpy, lam (states/s)
     counted: dict[str, int] = field(default_factory=dict)  # states evaluated
     error: dict[str, tuple[float, bool]] = field(default_factory=dict)
-    bound: dict[str, float] = field(default_factory=dict)  # states/s: flops, libm timed
+    bound: dict[str, float] = field(default_factory=dict)  # states/s: flops, libm, roofline
     peak: float = 0.0  # flops/s measured next to the C batch
+    divisions: int = 0  # divisions per state in the C code
+    traffic: int = 0  # bytes per state: state arrays read and output written
+    bandwidth: float = 0.0  # bytes/s of the copy kernel measured next to the C batch
 
 
 def timed_generate(case: Case, target: str, strategy: str, limit: float):
@@ -487,6 +533,26 @@ def timed_generate(case: Case, target: str, strategy: str, limit: float):
     with time_limit(limit):
         code = sm.codegen.generate(scene, target, strategy=strategy, functions=[case.function])
     return code, time.perf_counter() - t0
+
+
+_DIVISION = re.compile(r"(?<![/*])/(?![/*])")
+
+
+def memory_traffic(code, name: str, n: int) -> tuple[int, int]:
+    """(divisions, bytes per state) of function ``name`` from the generated C: the
+    divisions in its body (comments left out), and the bytes of the state arrays it reads
+    (those not marked ``(void)``) plus those of its output."""
+    (text,) = [t for f, t in code.files.items() if f.endswith(".c")]
+    start = re.search(rf"^int \w+_{re.escape(name)}\(([^)]*)\)\n\{{", text, re.M)
+    if start is None:
+        raise RuntimeError(f"no definition of {name} in the generated C")
+    end = text.index("\n}\n", start.end())
+    body = re.sub(r"/\*.*?\*/", "", text[start.end() : end], flags=re.S)
+    params = [a.split("*")[-1].strip() for a in start.group(1).split(",")]
+    states = [a for a in params if a in ("q", "v", "y") and f"(void){a};" not in body]
+    read = sum(2 * n if a == "y" else n for a in states)
+    (out,) = [f.out_size for f in code.functions if f.name == name]
+    return len(_DIVISION.findall(body)), 8 * (read + out)
 
 
 def header_costs(code, name: str) -> tuple[int, int, Counter]:
@@ -586,6 +652,7 @@ def run_row(case: Case, strategy: str, opts, machine: Machine, work: Path, log) 
     ops, row.solve["c"], row.libm = header_costs(code_c, name)
     if ops != row.ops["c"]:
         raise RuntimeError(f"{name}: header states {ops} operations, operation_counts {row.ops}")
+    row.divisions, row.traffic = memory_traffic(code_c, name, code_c.plan.n)
     base = make_baseline(case, strategy)
     row.baseline, row.gen["lam"], row.ops["lam"] = base.what, base.make_time, base.ops
     row.solve["lam"] = base.solve_flops
@@ -639,10 +706,12 @@ def run_row(case: Case, strategy: str, opts, machine: Machine, work: Path, log) 
     # the C batch, with the peak flop rate and the libm costs measured just before and
     # after it (best of both: the machine is shared)
     peak, libm = machine.rate(), machine.libm(row.libm)
+    div, bandwidth = machine.division(), machine.bandwidth()
     row.rate["c"] = N / best_time(lambda: ours(mod_c, Q, V))
     row.counted["c"] = N
     peak = max(peak, machine.rate())
     libm = {k: min(t, libm[k]) for k, t in machine.libm(row.libm).items()}
+    div, row.bandwidth = min(div, machine.division()), max(bandwidth, machine.bandwidth())
     done, spent = chunked_time(
         lambda a, b: ours(mod_np, Q[a:b], V[a:b]), N, opts.chunk, opts.budget
     )
@@ -658,6 +727,10 @@ def run_row(case: Case, strategy: str, opts, machine: Machine, work: Path, log) 
     timed = (flops - calls) / peak + sum(k * libm[name] for name, k in row.libm.items())
     row.bound["flops"] = peak / flops if flops else float("inf")
     row.bound["libm"] = 1 / timed if timed else float("inf")
+    divs = min(row.divisions, max(flops - calls, 0))
+    compute = (flops - calls - divs) / peak + sum(k * libm[name] for name, k in row.libm.items())
+    compute += divs * div
+    row.bound["roofline"] = 1 / max(compute, row.traffic / row.bandwidth)
     return row
 
 
@@ -719,7 +792,8 @@ def _bound_line(r: Row) -> str:
         f"{r.peak / 1e9:5.2f} {r.ops['c'] + r.solve['c']:7.0f} {_g(r.rate['c'], 8)} |"
         f" {_g(r.bound['flops'], 8)}"
         f" {r.bound['flops'] / r.rate['c']:7.2f} | {_g(r.bound['libm'], 8)}"
-        f" {r.bound['libm'] / r.rate['c']:7.2f}   {calls}"
+        f" {r.bound['libm'] / r.rate['c']:7.2f} | {r.divisions:4d} {r.traffic:5d}"
+        f" {_g(r.bound['roofline'], 8)} {r.bound['roofline'] / r.rate['c']:7.2f}   {calls}"
     )
 
 
@@ -779,7 +853,7 @@ def print_tables(rows: list[Row], states: int) -> None:
     _table(
         "4. Flop bound of the C batch [states/s]",
         f"{'peak':>5} {'flops':>7} {'C':>8} | {'bound':>8} {'C/bound':>7} | {'bound2':>8}"
-        f" {'C/bound2':>7}"
+        f" {'C/bound2':>7} | {'divs':>4} {'bytes':>5} {'roofline':>8} {'C/roof':>7}"
         "   libm calls per state",
         rows,
         _bound_line,
@@ -789,7 +863,10 @@ def print_tables(rows: list[Row], states: int) -> None:
         " better); flops = ops C + solve C per state; bound = peak / flops;\n"
         "C/bound = C batch time / (flops x states / peak) (issue 4 target: <= 3).  bound2"
         " charges each libm call its cost measured next to the C batch instead of\n"
-        "one flop (the other operations at the peak rate)."
+        "one flop (the other operations at the peak rate).  roofline: bound2 with each"
+        " division (divs per state) at its measured cost, or the memory time of\n"
+        "the bytes per state (state arrays read + output) at the copy kernel's rate,"
+        " whichever is longer; C/roof = C batch time / that time."
     )
     _targets(rows)
 
@@ -805,7 +882,11 @@ def _targets(rows: list[Row]) -> None:
                 f" {s['lam'] / s.get('raw', float('nan')):.1f}x through the bare C function"
             )
     done = [r for r in rows if not r.note and r.ops["c"] + r.solve["c"] > 0]
-    for key, what in (("flops", "each op one flop"), ("libm", "libm calls at measured cost")):
+    for key, what in (
+        ("flops", "each op one flop"),
+        ("libm", "libm calls at measured cost"),
+        ("roofline", "roofline: libm and divisions at measured cost, memory traffic"),
+    ):
         ok = [r for r in done if r.bound[key] / r.rate["c"] <= 3]
         print(
             f"  batch C within 3x of the flop bound ({what}): {len(ok)} of {len(done)} rows"
@@ -858,6 +939,8 @@ def main() -> None:
             + ", ".join(
                 f"{k} {v * 1e9:.1f}" for k, v in machine.libm(LIBM_UNARY + LIBM_BINARY).items()
             )
+            + f"; division {machine.division() * 1e9:.2f} ns; copy kernel"
+            f" {machine.bandwidth() / 1e9:.1f} GB/s (read + written)"
         )
         rows: list[Row] = []
         stopped: set[tuple[str, str]] = set()

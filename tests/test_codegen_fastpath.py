@@ -1,7 +1,8 @@
-"""The single-state fast path of the loaded C module: the same results as the general path
+"""The single-state fast path of the loaded C module, by both of its routes (the CPython
+extension built next to the library, and ctypes): the same results as the general path
 (and as the NumPy backend), arguments it does not handle are passed on to the general path
-and refused there with its messages, nothing is broadcast silently, and threads do not
-share its buffers."""
+and refused there with its messages, nothing is broadcast silently, threads do not share
+its buffers, and a failure raises NumericalError."""
 
 from __future__ import annotations
 
@@ -12,17 +13,62 @@ import pytest
 from codegen_support import require_c_compiler
 
 import symmech as sm
-from symmech.codegen import CodegenError
+from symmech.codegen import CodegenError, NumericalError
+from symmech.codegen.build import extension_includes
 from symmech.examples import carnot_3_7, pendulum_on_cart
 
 
-@pytest.fixture(scope="module")
-def modules():
+@pytest.fixture(scope="module", params=["extension", "ctypes"])
+def modules(request):
     require_c_compiler()
     scene = pendulum_on_cart(3)
     code_c = sm.codegen.generate(scene, "c", strategy="linear_solve")
     code_np = sm.codegen.generate(scene, "numpy", strategy="linear_solve")
-    return code_c.load(), code_np.load()
+    c = code_c.load(extension=request.param == "extension")
+    if request.param == "ctypes":
+        assert c.fast_path == "ctypes (extension=False)"
+    return c, code_np.load()
+
+
+def test_the_extension_is_used_where_the_headers_are():
+    """With the CPython and NumPy headers (as on any python.org, pyenv, conda or Docker
+    Python) one-state calls go through the extension; without them through ctypes, and
+    the module says why."""
+    require_c_compiler()
+    c = sm.codegen.generate(carnot_3_7(), "c").load()
+    _, missing = extension_includes()
+    if missing is None:
+        assert c.fast_path.startswith("CPython extension _symmech_ext_"), c.fast_path
+        assert type(c._fast["impact_rough_wall"]).__name__ == "builtin_function_or_method"
+    else:
+        assert c.fast_path == f"ctypes (no CPython extension: {missing})"
+
+
+def test_both_routes_give_the_same_doubles_for_every_function():
+    require_c_compiler()
+    code = sm.codegen.generate(pendulum_on_cart(2), "c", strategy="linear_solve", projectors=False)
+    ext, plain = code.load(), code.load(extension=False)
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        q, v = rng.normal(size=ext.n), rng.normal(size=ext.n)
+        p = 1 + rng.random(len(ext.parameters))
+        for name in ext.functions:
+            spec = ext._spec[name]
+            args = [np.concatenate([q, v])] if spec.state == ("y",) else [q, v][: len(spec.state)]
+            a = ext.call(name, *args, params=p)
+            b = plain.call(name, *args, params=p)
+            assert a.shape == b.shape and np.array_equal(a, b), name
+            # lists of Python floats and ints are read too
+            assert np.array_equal(ext.call(name, *[list(x) for x in args], params=list(p)), a)
+
+
+def test_a_failure_in_the_fast_path_raises_numerical_error(modules):
+    c, _ = modules
+    q, _, p = _state(c, 5)
+    with pytest.raises(NumericalError, match=r"^acceleration: an output, or an input"):
+        c.acceleration(q, np.full(c.n, np.inf), p)
+    with pytest.raises(NumericalError, match=r"^mass_matrix: an output"):
+        c.mass_matrix(np.full(c.n, np.nan), p)
 
 
 def _state(mod, seed):

@@ -21,7 +21,14 @@ from pathlib import Path
 
 from symmech.errors import SymmechError
 
-__all__ = ["DEFAULT_FLAGS", "CompileError", "cache_dir", "compile_library", "find_compiler"]
+__all__ = [
+    "DEFAULT_FLAGS",
+    "CompileError",
+    "cache_dir",
+    "compile_library",
+    "extension_includes",
+    "find_compiler",
+]
 
 #: Flags for the loadable library: C99, optimised, position independent.  No
 #: -ffast-math: the generated code relies on IEEE semantics (isfinite, no reassociation).
@@ -69,24 +76,46 @@ def cache_dir(path: str | Path | None = None) -> Path:
     return folder
 
 
+def extension_includes() -> tuple[list[str], str | None]:
+    """The include folders of the CPython and NumPy headers, and None; or ([], the reason)
+    when a header is missing (e.g. a Python without its development files)."""
+    import sysconfig
+
+    import numpy
+
+    folders = [sysconfig.get_paths().get("include", ""), numpy.get_include()]
+    for folder, header in zip(folders, ("Python.h", "numpy/arrayobject.h"), strict=True):
+        if not folder or not (Path(folder) / header).is_file():
+            return [], f"{header} not found (in {folder or 'no include folder'})"
+    return folders, None
+
+
+def library_key(compiler: str, flags: Sequence[str], sources: Mapping[str, str]) -> str:
+    """The cache key of a build: the compiler's identity, the flags and the sources."""
+    digest = hashlib.sha256()
+    for part in (_compiler_identity(compiler), "\0".join(flags)):
+        digest.update(part.encode())
+    for name in sorted(sources):
+        digest.update(name.encode() + b"\0" + sources[name].encode() + b"\0")
+    return digest.hexdigest()[:24]
+
+
 def compile_library(
     sources: Mapping[str, str],
     *,
     compiler: str | None = None,
     flags: Sequence[str] = DEFAULT_FLAGS,
     cache: str | Path | None = None,
+    filename: str | None = None,
 ) -> Path:
     """Compile the ``.c`` files of ``sources`` (name -> text, headers included) into a
-    shared library and return its path, reusing a cached build with the same key."""
+    shared library and return its path, reusing a cached build with the same key.
+    ``filename`` names the library (``{key}`` is replaced by the cache key; default
+    ``symmech_{key}.so``)."""
     cc = find_compiler(compiler)
-    digest = hashlib.sha256()
-    for part in (_compiler_identity(cc), "\0".join(flags)):
-        digest.update(part.encode())
-    for name in sorted(sources):
-        digest.update(name.encode() + b"\0" + sources[name].encode() + b"\0")
-    key = digest.hexdigest()[:24]
+    key = library_key(cc, flags, sources)
     folder = cache_dir(cache)
-    library = folder / f"symmech_{key}.so"
+    library = folder / (filename or "symmech_{key}.so").format(key=key)
     if library.is_file():
         return library
     with tempfile.TemporaryDirectory(prefix="build_", dir=folder) as tmp:

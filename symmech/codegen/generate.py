@@ -75,7 +75,9 @@ class GeneratedCode:
 
         Options: ``cache`` (the folder of compiled libraries and imported modules, see
         :func:`symmech.codegen.build.cache_dir`), and for C ``compiler`` and ``flags``
-        (see :func:`symmech.codegen.build.compile_library`).
+        (see :func:`symmech.codegen.build.compile_library`), and ``extension=False`` to make
+        one-state C calls through ctypes instead of the CPython extension built next to the
+        library (see :func:`symmech.codegen.module.load_generated`).
         """
         from symmech.codegen.module import load_generated
 
