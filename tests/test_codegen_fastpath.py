@@ -6,6 +6,7 @@ its buffers, and a failure raises NumericalError."""
 
 from __future__ import annotations
 
+import subprocess
 import threading
 
 import numpy as np
@@ -14,8 +15,9 @@ from codegen_support import require_c_compiler
 
 import symmech as sm
 from symmech.codegen import CodegenError, NumericalError
-from symmech.codegen.build import extension_includes
-from symmech.examples import carnot_3_7, pendulum_on_cart
+from symmech.codegen.build import extension_includes, find_compiler
+from symmech.codegen.module import extension_source
+from symmech.examples import carnot_3_7, carnot_4_4, pendulum_on_cart
 
 
 @pytest.fixture(scope="module", params=["extension", "ctypes"])
@@ -151,3 +153,24 @@ def test_functions_of_time_or_walls_keep_working():
     params = {"R": 1.0, "alpha": 0.5, "k": 1.0, "m": 2.0}
     q, v = [0.0, 1.0, 0.0], [1.0, -2.0, 0.0]
     np.testing.assert_allclose(c.impact(q, v, params), npm.impact(q, v, params), rtol=1e-14)
+
+
+def test_the_extension_source_compiles_without_warnings(tmp_path):
+    """The extension wrapper is held to the generated code's standard (bar -pedantic,
+    which the CPython headers themselves do not meet)."""
+    require_c_compiler()
+    folders, missing = extension_includes()
+    if missing is not None:
+        pytest.skip(f"no CPython extension can be built here: {missing}")
+    code = sm.codegen.generate(carnot_4_4(), "c", strategy="linear_solve", projectors=True)
+    code.write(tmp_path)
+    (tmp_path / "ext.c").write_text(extension_source(code, "ext"))
+    flags = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-fPIC", "-shared"]
+    includes = [f"-I{d}" for d in folders]
+    proc = subprocess.run(
+        [find_compiler(), *flags, *includes, "-o", "ext.so", "ext.c", f"{code.stem}.c", "-lm"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert proc.returncode == 0, proc.stderr
