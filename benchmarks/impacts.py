@@ -23,6 +23,7 @@ import sympy as sp
 
 import symmech as sm
 from symmech.declaration import shapes
+from symmech.examples import body_pendulum_rotor, trig_wall
 from symmech.impacts import derive_impact_map, kkt_post_velocity
 
 k, r, m, I, a, b = sp.symbols("k r m I a b", positive=True)
@@ -70,44 +71,6 @@ def ellipse_scene() -> sm.Scene:
     x, y, th = sm.coordinates("x y theta")
     psi = shapes.ellipse_gap((x, y), th, (a, b), shapes.Plane((0, 0), (-1, 0)))
     return sm.Scene((x, y, th), metric=sp.diag(m, m, I), walls=[sm.Wall(psi, restitution=alpha)])
-
-
-def trig_wall_scene() -> sm.Scene:
-    """Issue-3 audit, item 1: identity metric, one impulsive constraint, four trig terms."""
-    x, y, th = sm.coordinates("x y theta")
-    _xd, _yd, thd = sm.velocities((x, y, th))
-    psi = (
-        y
-        - sp.sin(x) * sp.cos(th) / 4
-        - sp.cos(x + th) / 6
-        - sp.sin(2 * x) * sp.cos(2 * th) / 5
-        - sp.cos(2 * x + th) / 7
-    )
-    return sm.Scene((x, y, th), metric=sp.eye(3), walls=[sm.Wall(psi, impulsive_constraints=[thd])])
-
-
-def four_dof_scene() -> sm.Scene:
-    """Issue-3 audit, item 2: body + pendulum + rotor with a knife edge, hitting the curved
-    moving wall y = c cos(x) + f(t) and rolling on it at impact (symbolic alpha)."""
-    M, mp_, l, J, c, R = sp.symbols("M m l J c R", positive=True)
-    x, y, th, ph = sm.coordinates("x y theta phi")
-    xd, yd, _thd, phd = sm.velocities((x, y, th, ph))
-    g = sp.Matrix(
-        [
-            [M + mp_, 0, -mp_ * l * sp.sin(th), 0],
-            [0, M + mp_, mp_ * l * sp.cos(th), 0],
-            [-mp_ * l * sp.sin(th), mp_ * l * sp.cos(th), mp_ * l**2 + I + J, J],
-            [0, 0, J, J],
-        ]
-    )
-    wall = sm.Wall(
-        y - c * sp.cos(x) - f(sm.t),
-        restitution=alpha,
-        impulsive_constraints=[xd * sp.cos(th) + yd * sp.sin(th) - R * phd],
-    )
-    return sm.Scene(
-        (x, y, th, ph), metric=g, constraints=[-sp.sin(th) * xd + sp.cos(th) * yd], walls=[wall]
-    )
 
 
 def numeric_check(scene: sm.Scene, imp) -> None:
@@ -194,8 +157,8 @@ def main() -> None:
         run("Example 3.13 (sphere, rough wall)", lambda: sphere_scene(False)),
         run("Example 4.4 (sphere, moving wall)", lambda: sphere_scene(True)),
         run("text 001 3.1 (bouncing ellipse)", ellipse_scene),
-        run("audit 1: trig wall + impulsive", trig_wall_scene, symbolic_kkt=False),
-        run("audit 2: 4-DOF trig, moving curved", four_dof_scene, symbolic_kkt=False),
+        run("audit 1: trig wall + impulsive", trig_wall, symbolic_kkt=False),
+        run("audit 2: 4-DOF trig, moving curved", body_pendulum_rotor, symbolic_kkt=False),
     ]
     head = (
         f"{'case':36s} {'derive [s]':>10s} {'KKT [s]':>8s} {'KKT/der':>7s} {'carnot [s]':>10s}"

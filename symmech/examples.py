@@ -19,6 +19,7 @@ from symmech.scene import Scene
 
 __all__ = [
     "EXAMPLES",
+    "body_pendulum_rotor",
     "bouncing_ellipse",
     "car",
     "carnot_3_7",
@@ -28,6 +29,7 @@ __all__ = [
     "pendulum_on_cart",
     "rolling_ball",
     "spinning_disk",
+    "trig_wall",
 ]
 
 
@@ -189,6 +191,66 @@ def pendulum_on_cart(n: int) -> Scene:
         T += m[i + 1] * (vx**2 + vy**2) / 2
         V += m[i + 1] * g * height
     return Scene(q, kinetic_energy=T, potential=V, name=f"pendulum_on_cart_{n}")
+
+
+# ------------------------------------------------------------------ stress scenes
+#
+# Not from the texts and not listed in EXAMPLES: two systems whose impact maps once took
+# minutes to derive (the audit of the impact-map issue); tests hold their derivation and
+# Carnot check to time guards and benchmarks/impacts.py times them.
+
+
+def trig_wall() -> Scene:
+    """A free point (x, y) with a rotor theta (identity metric) hitting the wall
+    ``y = sin(x) cos(theta)/4 + cos(x + theta)/6 + sin(2x) cos(2 theta)/5 + cos(2x + theta)/7``
+    with the rotor stopped at impact (impulsive constraint theta_dot = 0), elastic."""
+    x, y, th = coordinates("x y theta")
+    _xd, _yd, thd = velocities((x, y, th))
+    psi = (
+        y
+        - sp.sin(x) * sp.cos(th) / 4
+        - sp.cos(x + th) / 6
+        - sp.sin(2 * x) * sp.cos(2 * th) / 5
+        - sp.cos(2 * x + th) / 7
+    )
+    return Scene(
+        (x, y, th),
+        metric=sp.eye(3),
+        walls=[Wall(psi, impulsive_constraints=[thd])],
+        name="trig_wall",
+    )
+
+
+def body_pendulum_rotor() -> Scene:
+    """A body (mass M) at (x, y) carrying a pendulum (mass m, length l, inertia I, angle
+    theta) and a rotor (inertia J, angle phi), with a knife edge (no velocity across
+    theta); it hits the curved moving wall ``y = c cos(x) + f(t)`` with a symbolic
+    restitution alpha and rolls on it at impact (``x_dot cos + y_dot sin = R phi_dot``)."""
+    M, m, l, I, J, c, R = sp.symbols("M m l I J c R", positive=True)
+    alpha = sp.Symbol("alpha", nonnegative=True)
+    f = sp.Function("f")
+    x, y, th, ph = coordinates("x y theta phi")
+    xd, yd, _thd, phd = velocities((x, y, th, ph))
+    g = sp.Matrix(
+        [
+            [M + m, 0, -m * l * sp.sin(th), 0],
+            [0, M + m, m * l * sp.cos(th), 0],
+            [-m * l * sp.sin(th), m * l * sp.cos(th), m * l**2 + I + J, J],
+            [0, 0, J, J],
+        ]
+    )
+    wall = Wall(
+        y - c * sp.cos(x) - f(t),
+        restitution=alpha,
+        impulsive_constraints=[xd * sp.cos(th) + yd * sp.sin(th) - R * phd],
+    )
+    return Scene(
+        (x, y, th, ph),
+        metric=g,
+        constraints=[-sp.sin(th) * xd + sp.cos(th) * yd],
+        walls=[wall],
+        name="body_pendulum_rotor",
+    )
 
 
 EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {

@@ -23,6 +23,7 @@ import sympy as sp
 from test_impacts_support import kkt_at
 
 import symmech as sm
+from symmech import examples
 from symmech.impacts import adjugate, carnot, derive_impact_map
 from symmech.impacts.identity import DegreeBound, Unsupported, identically_zero
 
@@ -31,46 +32,8 @@ alpha = sp.Symbol("alpha", nonnegative=True)
 f = sp.Function("f")
 
 
-@functools.cache
-def trig_wall() -> sm.Scene:
-    x, y, th = sm.coordinates("x y theta")
-    _xd, _yd, thd = sm.velocities((x, y, th))
-    psi = (
-        y
-        - sp.sin(x) * sp.cos(th) / 4
-        - sp.cos(x + th) / 6
-        - sp.sin(2 * x) * sp.cos(2 * th) / 5
-        - sp.cos(2 * x + th) / 7
-    )
-    return sm.Scene((x, y, th), metric=sp.eye(3), walls=[sm.Wall(psi, impulsive_constraints=[thd])])
-
-
-@functools.cache
-def four_dof() -> sm.Scene:
-    """A body (mass M) at (x, y) carrying a pendulum (mass m, length l, angle theta) and a
-    rotor (inertia J, angle phi), with a knife edge (no velocity across theta); it hits the
-    curved moving wall y = c cos(x) + f(t) and rolls on it at impact."""
-    x, y, th, ph = sm.coordinates("x y theta phi")
-    xd, yd, _thd, phd = sm.velocities((x, y, th, ph))
-    g = sp.Matrix(
-        [
-            [M + m, 0, -m * l * sp.sin(th), 0],
-            [0, M + m, m * l * sp.cos(th), 0],
-            [-m * l * sp.sin(th), m * l * sp.cos(th), m * l**2 + I + J, J],
-            [0, 0, J, J],
-        ]
-    )
-    wall = sm.Wall(
-        y - c * sp.cos(x) - f(sm.t),
-        restitution=alpha,
-        impulsive_constraints=[xd * sp.cos(th) + yd * sp.sin(th) - R * phd],
-    )
-    return sm.Scene(
-        (x, y, th, ph),
-        metric=g,
-        constraints=[-sp.sin(th) * xd + sp.cos(th) * yd],
-        walls=[wall],
-    )
+trig_wall = functools.cache(examples.trig_wall)
+four_dof = functools.cache(examples.body_pendulum_rotor)
 
 
 def map_at(imp, point: dict, v_minus, dps: int = 40) -> list:
