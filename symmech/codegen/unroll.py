@@ -551,6 +551,41 @@ class Dialect:
     ) -> list[str]:
         """The printed statements; ``exprs[block, flat]`` is the printed expression of
         each input entry."""
+        out = [self.let(i.name, exprs[i.block, i.flat]) for i in prog.inputs]
+        allocated = False
+        for st in prog.statements:
+            kind = st[0]
+            if kind == "let":
+                out.append(self.let(st[1], self.expr(st[2])))
+            elif kind == "finite":
+                out.extend(self.finite([self.ref(r) for r in st[1]]))
+            elif kind == "positive":
+                out.extend(self.positive(self.expr(st[1], 1)))
+            elif kind == "out":
+                if not allocated:
+                    out.extend(self.allocate(out_shape))
+                    allocated = True
+                out.append(self.store(st[1], self.expr(st[2])))
+        return out
+
+    def let(self, name: str, expr: str) -> str:
+        """A local holding ``expr``."""
+        raise NotImplementedError
+
+    def finite(self, refs: Sequence[str]) -> list[str]:
+        """Fail (SYMMECH_NONFINITE) unless every value is finite."""
+        raise NotImplementedError
+
+    def positive(self, pivot: str) -> list[str]:
+        """Fail (SYMMECH_NOT_SPD) unless the pivot is positive."""
+        raise NotImplementedError
+
+    def allocate(self, out_shape: tuple[int, ...]) -> list[str]:
+        """Whatever must precede the first store into ``out``."""
+        return []
+
+    def store(self, index: int, expr: str) -> str:
+        """Entry ``index`` (row-major) of the output."""
         raise NotImplementedError
 
 
@@ -560,22 +595,18 @@ class CDialect(Dialect):
     def ref(self, r: Ref) -> str:
         return f"{r.array}[{r.index}]" if r.array else r.name
 
-    def lines(
-        self, prog: Program, out_shape: tuple[int, ...], exprs: Mapping[tuple[str, int], str]
-    ) -> list[str]:
-        out = [f"const double {i.name} = {exprs[i.block, i.flat]};" for i in prog.inputs]
-        for st in prog.statements:
-            kind = st[0]
-            if kind == "let":
-                out.append(f"const double {st[1]} = {self.expr(st[2])};")
-            elif kind == "finite":
-                tests = " && ".join(f"isfinite({self.ref(r)})" for r in st[1])
-                out.append(f"if (!({tests})) return SYMMECH_NONFINITE;")
-            elif kind == "positive":
-                out.append(f"if (!({self.expr(st[1], 1)} > 0.0)) return SYMMECH_NOT_SPD;")
-            elif kind == "out":
-                out.append(f"out[{st[1]}] = {self.expr(st[2])};")
-        return out
+    def let(self, name: str, expr: str) -> str:
+        return f"const double {name} = {expr};"
+
+    def finite(self, refs: Sequence[str]) -> list[str]:
+        tests = " && ".join(f"isfinite({r})" for r in refs)
+        return [f"if (!({tests})) return SYMMECH_NONFINITE;"]
+
+    def positive(self, pivot: str) -> list[str]:
+        return [f"if (!({pivot} > 0.0)) return SYMMECH_NOT_SPD;"]
+
+    def store(self, index: int, expr: str) -> str:
+        return f"out[{index}] = {expr};"
 
 
 class NumPyDialect(Dialect):
@@ -586,24 +617,20 @@ class NumPyDialect(Dialect):
     def ref(self, r: Ref) -> str:
         return f"{r.array}[..., {r.index}]" if r.array else r.name
 
-    def lines(
-        self, prog: Program, out_shape: tuple[int, ...], exprs: Mapping[tuple[str, int], str]
-    ) -> list[str]:
-        out = [f"{i.name} = {exprs[i.block, i.flat]}" for i in prog.inputs]
-        for st in prog.statements:
-            kind = st[0]
-            if kind == "let":
-                out.append(f"{st[1]} = {self.expr(st[2])}")
-            elif kind == "finite":
-                out.append(f"_require_finite({', '.join(self.ref(r) for r in st[1])})")
-            elif kind == "positive":
-                out.append(f"if not numpy.all({self.expr(st[1], 1)} > 0.0):")
-                out.append(
-                    '    raise numpy.linalg.LinAlgError("a matrix that must be positive'
-                    ' definite is not")'
-                )
-            elif kind == "out":
-                if not any(line.startswith("out = ") for line in out):
-                    out.append(f"out = numpy.empty(shape + {out_shape})")
-                out.append(f"out[..., {st[1]}] = {self.expr(st[2])}")
-        return out
+    def let(self, name: str, expr: str) -> str:
+        return f"{name} = {expr}"
+
+    def finite(self, refs: Sequence[str]) -> list[str]:
+        return [f"_require_finite({', '.join(refs)})"]
+
+    def positive(self, pivot: str) -> list[str]:
+        return [
+            f"if not numpy.all({pivot} > 0.0):",
+            '    raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")',
+        ]
+
+    def allocate(self, out_shape: tuple[int, ...]) -> list[str]:
+        return [f"out = numpy.empty(shape + {out_shape})"]
+
+    def store(self, index: int, expr: str) -> str:
+        return f"out[..., {index}] = {expr}"
