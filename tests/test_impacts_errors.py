@@ -39,6 +39,62 @@ def test_impulsive_constraint_dependent_on_the_wall():
         impact_map(scene, 0)
 
 
+def test_wall_gradient_in_the_constraint_span_only_on_the_wall():
+    """Generic sample points see nothing wrong: d psi = dy and mu = y dx + dy are
+    independent off the wall y = 0, the same one-form on it, where impacts happen."""
+    scene = sm.Scene((x, y), metric=sp.eye(2), constraints=[y * xd + yd], walls=[sm.Wall(y)])
+    with pytest.raises(
+        sm.ImpactError,
+        match=r"on the wall psi = y = 0 the gradient of psi lies in the span of the permanent"
+        r" constraints \['xdot\*y \+ ydot'\].* e\.g\. \{y=0\}",
+    ):
+        impact_map(scene, 0)
+
+
+def test_curved_wall_degenerate_only_on_the_wall():
+    """psi = y - x^2 and mu = (y - x^2 - 2x) dx + dy: equal on the parabola only; the
+    points of the wall are found by solving psi = 0 numerically."""
+    scene = sm.Scene(
+        (x, y),
+        metric=sp.diag(1, 2 + x**2),
+        constraints=[(y - x**2 - 2 * x) * xd + yd],
+        walls=[sm.Wall(y - x**2)],
+    )
+    with pytest.raises(sm.ImpactError, match=r"on the wall psi = -x\*\*2 \+ y = 0"):
+        impact_map(scene, 0)
+    # the same constraint against a wall it crosses transversally is fine
+    other = sm.Scene(
+        (x, y),
+        metric=sp.diag(1, 2 + x**2),
+        constraints=[(y - x**2 - 2 * x) * xd + yd],
+        walls=[sm.Wall(y - x**2 + 1)],
+    )
+    assert impact_map(other, 0).matrix.shape == (2, 2)
+
+
+def test_impulsive_constraint_dependent_only_on_the_wall():
+    scene = sm.Scene(
+        (x, y), metric=sp.eye(2), walls=[sm.Wall(y, impulsive_constraints=[y * xd + yd])]
+    )
+    with pytest.raises(
+        sm.ImpactError, match=r"on the wall psi = y = 0 the impulsive constraint nu\^1 = xdot\*y"
+    ):
+        impact_map(scene, 0)
+
+
+def test_points_on_a_moving_wall_with_an_arbitrary_function_of_time():
+    from symmech.declaration.sampling import sample_points
+    from symmech.impacts.degeneracy import points_on_wall
+
+    f = sp.Function("f")
+    psi = y - sp.sin(x) - f(sm.t)
+    base = sample_points([x, y, sm.t, f(sm.t)], count=4)
+    found = points_on_wall(psi, (x, y), base)
+    assert len(found) == 4
+    for p in found:
+        assert abs(sp.N(psi.xreplace(p), 30)) < 1e-30
+
+
 def test_impulsive_constraint_dependent_on_the_permanent_constraints():
     """Caught when the scene is declared (symmech.declaration.spec)."""
     with pytest.raises(sm.SceneError, match=r"impulsive_constraints .*linearly dependent"):

@@ -7,9 +7,11 @@ along N"; section 3.2: the same for ``{mu^a, d psi, nu^B}``).
 
 * :func:`check_regular` refuses walls for which C is singular *identically*: decided
   symbolically when cheap, else at sampled points (:mod:`symmech.declaration.sampling`);
-  a matrix singular at every sampled point is singular generically.  The sample points
-  are not restricted to the wall ``psi = 0``; the check is generic (it holds off a
-  measure-zero set).
+  a matrix singular at every sampled point is singular generically.  It also refuses
+  walls for which C is singular *on the wall*: impacts happen only where ``psi = 0``, and
+  a wall such as ``psi = y`` with the constraint ``y x_dot + y_dot = 0`` has its gradient
+  in the constraint span exactly there.  The points of the wall are found by
+  :func:`points_on_wall` (psi solved for one coordinate near each sampled point).
 * :func:`singular_set` lists the expressions whose vanishing makes the closed form
   undefined (denominators), with a description, so that a user can guard generated code
   instead of meeting NaN later.
@@ -38,6 +40,7 @@ __all__ = [
     "check_regular",
     "impact_singularities",
     "no_real_zeros",
+    "points_on_wall",
     "singular_set",
 ]
 
@@ -129,6 +132,66 @@ def _identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
     return bool(finite)
 
 
+def points_on_wall(
+    psi: sp.Expr, coordinates: Sequence[sp.Symbol], points: Sequence[dict], dps: int = 40
+) -> list[dict]:
+    """Points of the wall ``psi = 0`` near the sampled ``points``: for each, ``psi`` is
+    solved (:func:`mpmath.findroot`, ``dps`` digits) for the first coordinate it depends
+    on that gives a real root, starting from the sampled value and a few others; the
+    other values are kept.  A point where no root is found is left out (a wall that is
+    never reached gives none)."""
+    deps = [qj for qj in coordinates if sp.diff(psi, qj) != 0]
+    undefined = psi.atoms(sp.core.function.AppliedUndef)
+    out = []
+    for point in points:
+        fixed_undefined = {u: point[u] for u in undefined if u in point}
+        for qj in deps:
+            rest = {k: v for k, v in point.items() if k != qj}
+            f_expr = psi.xreplace({**fixed_undefined, **rest})
+            if f_expr.free_symbols - {qj} or f_expr.atoms(sp.core.function.AppliedUndef):
+                continue
+            try:
+                fn = sp.lambdify(qj, f_expr, "mpmath")
+            except (TypeError, ValueError, SyntaxError, NameError):  # pragma: no cover
+                continue
+            root = None
+            with mp.workdps(dps + 10):
+                for x0 in (point[qj], 0, 1, -1, 2, -2):
+                    try:
+                        x = mp.findroot(fn, mp.mpf(sp.N(x0, dps + 10)))
+                        value = fn(x)
+                    except (ValueError, ZeroDivisionError, TypeError, OverflowError):
+                        continue
+                    if mp.im(x) == 0 and abs(value) < mp.mpf(10) ** (5 - dps):
+                        root = sp.Float(mp.re(x), dps)
+                        break
+            if root is not None:
+                out.append({**point, qj: root})
+                break
+    return out
+
+
+def _wall_gradient_ratio(
+    C00: sp.Expr, g: sp.MatrixBase, dpsi: sp.MatrixBase, point: dict
+) -> mp.mpf | None:
+    """``C^00 / g(Y^0, Y^0)`` at a point, Y^0 = g^-1 d psi: the squared sine of the angle
+    between d psi and the span of the permanent constraints (1 without constraints, 0
+    when d psi lies in their span); None if it cannot be evaluated."""
+    try:
+        with mp.workdps(40):
+
+            def at(e: sp.Expr) -> mp.mpf:
+                return mp.mpf(sp.N(e.xreplace(point), 45))
+
+            G = mp.matrix([[at(e) for e in row] for row in g.tolist()])
+            d = mp.matrix([at(e) for e in dpsi])
+            scale = (d.T * mp.lu_solve(G, d))[0]
+            c = mp.mpf(sp.N(C00.xreplace(point), 45))
+            return c / scale if scale > 0 else None
+    except (TypeError, ValueError, ZeroDivisionError):
+        return None
+
+
 def check_regular(
     C: sp.MatrixBase,
     points: Sequence[dict],
@@ -138,8 +201,14 @@ def check_regular(
     mu: sp.MatrixBase,
     nu: sp.MatrixBase,
     velocities: Sequence[sp.Symbol],
+    g: sp.MatrixBase | None = None,
+    dpsi: sp.MatrixBase | None = None,
+    wall_points: Sequence[dict] = (),
 ) -> None:
-    """Raise :class:`~symmech.ImpactError` if ``C^{AB}`` is singular identically.
+    """Raise :class:`~symmech.ImpactError` if ``C^{AB}`` is singular identically, or at
+    every point of ``wall_points`` (points of the wall ``psi = 0``, see
+    :func:`points_on_wall`; ``g`` and ``dpsi`` in the velocity basis scale the test of
+    ``C^00`` there).
 
     The first block ``C^{00} = g(P grad psi, P grad psi)`` vanishes iff ``d psi`` lies in
     the span of the permanent constraints (then the wall cannot stop any motion allowed by
@@ -161,12 +230,8 @@ def check_regular(
             " so no impact map exists"
         )
     k = C.rows
-    if k == 1:
-        return
     verdicts = [v for v in (_singular_blocks(C, point) for point in points) if v is not None]
-    if not verdicts:
-        return
-    for j in range(1, k):
+    for j in range(1, k if verdicts else 1):
         if all(v[j] for v in verdicts):
             symbolic = (
                 sp.simplify(C[: j + 1, : j + 1].det())
@@ -181,6 +246,57 @@ def check_regular(
                 f" {perm} and the preceding impulsive constraints (the Gram matrix"
                 f" C^AB = g(P Y^A, P Y^B) has rank < {j + 1} at every sampled point);"
                 " drop it (as Carnot paper Example 3.13 drops omega_y)"
+            )
+    _check_on_the_wall(C, wall, psi, perm, nu, form, g, dpsi, wall_points)
+
+
+def _check_on_the_wall(
+    C: sp.MatrixBase,
+    wall: str,
+    psi: sp.Expr,
+    perm: list[str],
+    nu: sp.MatrixBase,
+    form: Callable[[sp.MatrixBase], str],
+    g: sp.MatrixBase | None,
+    dpsi: sp.MatrixBase | None,
+    wall_points: Sequence[dict],
+) -> None:
+    """The part of :func:`check_regular` on the wall: C singular at every point found on
+    it (at least two) refuses the wall."""
+    if len(wall_points) < 2:
+        return
+
+    def where(point: dict) -> str:
+        items = sorted(point.items(), key=lambda kv: str(kv[0]))
+        shown = ", ".join(f"{k}={sp.N(v, 6)}" for k, v in items if psi.has(k))
+        return "{" + shown + "}"
+
+    if g is not None and dpsi is not None and perm:
+        ratios = [_wall_gradient_ratio(C[0, 0], g, dpsi, p) for p in wall_points]
+        known = [(r, p) for r, p in zip(ratios, wall_points, strict=True) if r is not None]
+        if len(known) >= 2 and all(abs(r) < HADAMARD_TOLERANCE for r, _ in known):
+            raise ImpactError(
+                f"wall {wall!r}: on the wall psi = {_short(psi)} = 0 the gradient of psi lies"
+                f" in the span of the permanent constraints {perm} (C = g(P grad psi, P grad"
+                f" psi) = 0 at every point of the wall sampled, e.g. {where(known[0][1])};"
+                " Carnot paper eq. 7): no motion allowed by the constraints approaches the"
+                " wall, so no impact map exists"
+            )
+    k = C.rows
+    if k == 1:
+        return
+    verdicts = [v for v in (_singular_blocks(C, p) for p in wall_points) if v is not None]
+    if len(verdicts) < 2:
+        return
+    for j in range(1, k):
+        if all(v[j] for v in verdicts) and not all(v[j - 1] for v in verdicts):
+            raise ImpactError(
+                f"wall {wall!r}: on the wall psi = {_short(psi)} = 0 the impulsive constraint"
+                f" nu^{j} = {form(nu[j - 1, :])} is linearly dependent on d psi, the permanent"
+                f" constraints {perm} and the preceding impulsive constraints (C^AB has rank"
+                f" < {j + 1} at every point of the wall sampled, e.g."
+                f" {where(wall_points[0])}); drop it or write it so that it is independent"
+                " where the impact happens"
             )
 
 

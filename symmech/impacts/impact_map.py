@@ -32,7 +32,12 @@ from symmech.declaration.symbols import t as TIME
 from symmech.errors import ImpactError
 from symmech.geometry.simplification import Level
 from symmech.impacts.carnot import CarnotResult, carnot_residual
-from symmech.impacts.degeneracy import Singularity, check_regular, impact_singularities
+from symmech.impacts.degeneracy import (
+    Singularity,
+    check_regular,
+    impact_singularities,
+    points_on_wall,
+)
 from symmech.impacts.energy_law import EnergyLaw, energy_law
 from symmech.impacts.newton import newton_map
 from symmech.impacts.projectors import ImpactProjectors, impact_projectors
@@ -283,6 +288,16 @@ def _resolve(declaration: Declaration, wall: object) -> ResolvedWall:
     raise ImpactError(f"impact map: {wall!r} is not a wall of this scene")
 
 
+def _with_undefined(points: Sequence[dict], psi: sp.Expr) -> list[dict]:
+    """``points`` with a sampled value for each arbitrary function of time in ``psi``
+    (a moving wall ``x - f(t)``), so that psi can be evaluated there."""
+    undefined = sorted(psi.atoms(sp.core.function.AppliedUndef), key=str)
+    if not undefined:
+        return list(points)
+    extra = sample_points(undefined, count=len(points), seed=20010102)
+    return [{**p, **x} for p, x in zip(points, extra, strict=True)]
+
+
 def _is_identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
     """Zero at every sampled point (30 digits); a single non-zero value decides at once,
     so the symbolic confirmation (``simplify``, small expressions only) runs only for
@@ -360,8 +375,21 @@ def derive_impact_map(
     mu = sp.Matrix(declaration.constraint_matrix)
     nu = sp.Matrix(rw.impulsive_matrix)
 
+    on_wall = points_on_wall(psi, q, _with_undefined(points, psi))
+
     def check(C: sp.Matrix, PY: sp.Matrix) -> None:
-        check_regular(C, points, wall=rw.name, psi=psi, mu=mu, nu=nu, velocities=v)
+        check_regular(
+            C,
+            points,
+            wall=rw.name,
+            psi=psi,
+            mu=mu,
+            nu=nu,
+            velocities=v,
+            g=g,
+            dpsi=dpsi,
+            wall_points=on_wall,
+        )
 
     proj = impact_projectors(g, mu, dpsi, nu, level, check=check)
 
