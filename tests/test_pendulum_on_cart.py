@@ -78,3 +78,26 @@ def test_acceleration_matches_kane_small():
     a_ours = scene.acceleration().xreplace(ours).evalf(30)
     a_kane = M_k.xreplace(theirs).evalf(30).LUsolve(f_k.xreplace(theirs).evalf(30))
     assert (a_ours - a_kane).norm() < 1e-20
+
+
+def test_mass_matrix_and_forcing_need_no_inverse_or_solve(monkeypatch):
+    """g and f (first-kind contraction, no inverse) for the 8-link pendulum: every route
+    to an inverse or a linear solve is made to fail, and they are still formed."""
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("g and f must not invert or solve")
+
+    for name in ("inv", "LUsolve", "solve", "adjugate", "det", "cholesky_solve", "LDLsolve"):
+        monkeypatch.setattr(sp.MatrixBase, name, refuse)
+    import sys
+
+    for module in [m for name, m in sys.modules.items() if name.startswith("symmech.")]:
+        for fn in ("field_solve", "solve_spd", "adjugate_det"):
+            if hasattr(module, fn):
+                monkeypatch.setattr(module, fn, refuse)
+    scene = pendulum_on_cart(8)
+    with pytest.raises(AssertionError, match="must not"):  # the patch does bite
+        pendulum_on_cart(1).acceleration()
+    g, f = scene.mass_matrix(), scene.forcing()
+    assert g.shape == (9, 9) and f.shape == (9, 1)
+    assert all(e != 0 for e in f[1:])  # gravity and velocity terms are there

@@ -105,6 +105,13 @@ def refused(**kwargs) -> sm.SceneError:
         (dict(metric=sp.eye(3), potential=sp.floor(x)), ["potential", "floor"]),
         (dict(metric=sp.eye(3), potential=sp.Max(x, y)), ["potential", "Max"]),
         (dict(metric=sp.eye(3), potential=sp.Min(x, y)), ["potential", "Min"]),
+        (dict(metric=sp.eye(3), potential=sp.Mod(x, 1)), ["potential", "non-smooth", "Mod"]),
+        (dict(metric=sp.eye(3), potential=sp.ceiling(x)), ["potential", "ceiling"]),
+        (dict(metric=sp.eye(3), potential=sp.frac(x)), ["potential", "frac"]),
+        (
+            dict(metric=sp.diag(1, 1, 1 + 2 * sp.cos(th))),
+            ["metric", "not positive definite", "theta="],
+        ),
         (dict(metric=sp.diag(1, 1, 1 + sm.t**2)), ["metric", "depends on time"]),
         (dict(metric=sp.eye(3), constraints=[xd + sm.t * yd]), ["constraints", "depends on time"]),
         (

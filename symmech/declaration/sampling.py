@@ -28,7 +28,7 @@ def atom_key(atom: sp.Basic) -> tuple[str, str]:
     return (str(atom), sp.srepr(atom))
 
 
-def _sample(sym: sp.Basic, rng: random.Random) -> sp.Rational:
+def _sample(sym: sp.Basic, rng: random.Random, far: bool = False) -> sp.Rational:
     # Rationals keep the downstream evaluation exact when sympy can do it.
     def rat(lo: float, hi: float) -> sp.Rational:
         return sp.Rational(rng.randint(int(lo * 1000), int(hi * 1000)), 1000)
@@ -49,18 +49,28 @@ def _sample(sym: sp.Basic, rng: random.Random) -> sp.Rational:
         return -rat(0.3, 2.0)
     if sym.is_nonpositive:
         return -rat(0.0, 2.0)
+    if far:
+        return rng.choice((-1, 1)) * rat(2.5, 3.5)
     return rat(-1.5, 1.5)
 
 
-def sample_point(symbols: Iterable[sp.Basic], rng: random.Random) -> dict[sp.Basic, sp.Rational]:
-    """One random rational value per symbol, honouring positive/negative/integer assumptions."""
-    return {s: _sample(s, rng) for s in symbols}
+def sample_point(
+    symbols: Iterable[sp.Basic], rng: random.Random, far: bool = False
+) -> dict[sp.Basic, sp.Rational]:
+    """One random rational value per symbol, honouring positive/negative/integer assumptions;
+    ``far``: a real symbol without a sign gets a value of magnitude in [2.5, 3.5] (an angle
+    near +-pi, a displacement of a few units) instead of one in [-1.5, 1.5]."""
+    return {s: _sample(s, rng, far) for s in symbols}
 
 
 def sample_points(
-    symbols: Iterable[sp.Basic], count: int = 4, seed: int = 20010101
+    symbols: Iterable[sp.Basic], count: int = 4, seed: int = 20010101, far: int = 0
 ) -> list[dict[sp.Basic, sp.Rational]]:
-    """``count`` reproducible random points (fixed seed, so a failing check is repeatable)."""
+    """``count`` reproducible random points (fixed seed, so a failing check is repeatable),
+    then ``far`` points away from the origin (see :func:`sample_point`): a metric such as
+    ``diag(1, 1 + 2 cos(theta))``, positive for |theta| < 2 pi / 3 only, is found
+    indefinite there.  The first ``count`` points do not depend on ``far``."""
     syms = sorted(set(symbols), key=atom_key)
     rng = random.Random(seed)
-    return [sample_point(syms, rng) for _ in range(count)]
+    near = [sample_point(syms, rng) for _ in range(count)]
+    return near + [sample_point(syms, rng, far=True) for _ in range(far)]

@@ -96,6 +96,7 @@ NON_SMOOTH = (
     sp.Max,
     sp.Min,
     sp.frac,
+    sp.Mod,
     sp.DiracDelta,
     sp.re,
     sp.im,
@@ -103,6 +104,8 @@ NON_SMOOTH = (
 )
 
 _SAMPLES = 4
+#: ... and points away from the origin (angles near +-pi), see sampling.sample_points.
+_FAR_SAMPLES = 2
 _EXTRA_SEED = 19970521  # seed of the values of velocities and undefined functions
 
 
@@ -277,13 +280,13 @@ class _Points:
     values for any other atom an expression contains (velocities, undefined functions)."""
 
     def __init__(self, base_symbols: Iterable[sp.Symbol]):
-        self.base = sample_points(base_symbols, count=_SAMPLES)
+        self.base = sample_points(base_symbols, count=_SAMPLES, far=_FAR_SAMPLES)
 
     def for_(self, *exprs: sp.Basic | sp.MatrixBase) -> list[dict]:
         missing = _atoms(*exprs) - set(self.base[0])
         if not missing:
             return self.base
-        extra = sample_points(missing, count=_SAMPLES, seed=_EXTRA_SEED)
+        extra = sample_points(missing, count=len(self.base), seed=_EXTRA_SEED)
         return [{**b, **x} for b, x in zip(self.base, extra, strict=True)]
 
 
