@@ -265,7 +265,20 @@ class _Problems:
 
     def raise_if_any(self, path: str | None) -> None:
         if self.items:
-            raise SceneFileError(self.items, path=path, details=self.details)
+            details = [
+                (f if f is None else printable(f), line, t if t is None else printable(t))
+                for f, line, t in self.details
+            ]
+            raise SceneFileError([printable(i) for i in self.items], path=path, details=details)
+
+
+def printable(text: str) -> str:
+    """``text`` with every non-printable character (terminal escapes, BEL, line breaks
+    hidden in a key) written as its Python escape, so that a message from a hostile file
+    cannot drive the terminal or forge a line."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 # ---------------------------------------------------------------------------------------

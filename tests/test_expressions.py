@@ -242,6 +242,16 @@ HOSTILE = [
     ("*".join(["(9**60)"] * 10), ["(9**60)*(9**60)", "digits"]),
     ("1" * 41, ["1" * 41, "max_digits"]),
     ("1e999", ["1e999", "out of range"]),
+    # limits that sympy's own merging would otherwise slip past, and constants that
+    # float64 cannot hold (evaluating them exactly takes minutes and gigabytes)
+    ("(y**64)**64", ["(y**64)**64", "degree 4096", "limit 256"]),
+    ("(((y + 1)**64)**64)**64", ["((y + 1)**64)**64", "degree 4096"]),
+    ("y**60*y**60", ["y**60*y**60", "y**120", "max_exponent"]),
+    ("((x + y)**60 + 1)**60", ["degree 3600"]),
+    ("m*y*exp(exp(exp(100)))", ["'exp(exp(100))'", "outside the range of float64"]),
+    ("1e308*1e308", ["'1e308*1e308'", "outside the range of float64"]),
+    ("y*1e-400", ["'1e-400'", "underflows to 0"]),
+    ("y*exp(-800)", ["'exp(-800)' is a constant nonzero but below", "underflows to 0"]),
     ("sin", ["'sin'", "must be called"]),
     ("", ["empty"]),
     ("   ", ["empty"]),

@@ -11,6 +11,7 @@ into each test file.
 from __future__ import annotations
 
 import builtins
+import codecs
 import doctest
 import importlib
 import math
@@ -398,6 +399,10 @@ def test_scenefile_docstring_examples():
 # ---------------------------------------------------------------------------------------
 # hostile and malformed files
 
+# the codec read_scene uses is imported once here, not lazily inside a test that forbids
+# exec (the tests must pass in any order and selection)
+codecs.lookup("utf-8-sig")
+
 H_IMPORT = "__import__('os').system('touch {marker}')"
 H_BASES = "().__class__.__bases__"
 
@@ -505,6 +510,34 @@ MALFORMED = [
         ["lambda: y", "not allowed"],
     ),
     ("lambda alone", scene_text(psi='"lambda: 0"'), "walls[0].psi", 12, ["lambda", "not allowed"]),
+    (
+        "nested powers",
+        scene_text(potential='"(((y + 1)**64)**64)**64"'),
+        "potential",
+        3,
+        ["degree 4096", "limit 256"],
+    ),
+    (
+        "nested exponentials",
+        scene_text(potential='"m*y*exp(exp(exp(100)))"'),
+        "potential",
+        3,
+        ["exp(exp(100))", "outside the range of float64"],
+    ),
+    (
+        "float overflow",
+        scene_text(metric='["m*1e308*1e308", "m"]'),
+        "metric[0,0]",
+        2,
+        ["'m*1e308*1e308' has the coefficient 1.00E+616", "outside the range of float64"],
+    ),
+    (
+        "terminal escape in a key",
+        scene_text(parameters='"\\u001b]0;pwned\\u0007" = 1'),
+        "parameters.\\x1b]0;pwned\\x07",
+        10,
+        ["is not an identifier", "'\\x1b]0;pwned\\x07'"],
+    ),
     ("attribute", scene_text(psi='"y.func"'), "walls[0].psi", 12, ["attribute access 'y.func'"]),
     ("subscript", scene_text(potential='"y[0]"'), "potential", 3, ["subscript 'y[0]'"]),
     (
@@ -1185,3 +1218,20 @@ def test_scene_file_errors_are_symmech_errors():
         loads_scene("coordinates = 1")
     with pytest.raises(ValueError):
         loads_scene("coordinates = 1")
+
+
+def test_messages_never_carry_control_characters(tmp_path: Path):
+    """A key or name with terminal escapes is echoed escaped: it cannot drive the
+    terminal or forge a line of the report."""
+    path = tmp_path / "bad.toml"
+    path.write_text(
+        scene_text(parameters='"\\u001b[2J\\nline 1: fake" = 1\n"\\u0007" = 2'),
+        encoding="utf-8",
+    )
+    exc = _load_refused(path)
+    text = str(exc)
+    assert "\\x1b[2J\\nline 1: fake" in text and "\\x07" in text
+    assert all(c.isprintable() or c == "\n" for c in text), repr(text)
+    lines = text.splitlines()
+    assert len(lines) == 1 + len(exc.details) == 3  # a header, then one line per problem
+    assert all(line.startswith("  - ") for line in lines[1:])

@@ -63,6 +63,7 @@ import re
 import unicodedata
 import warnings
 from collections.abc import Callable, Mapping
+from fractions import Fraction
 from types import MappingProxyType
 from typing import NoReturn
 
@@ -73,6 +74,7 @@ from symmech.errors import ExpressionError
 __all__ = [
     "ALLOWED_CONSTANTS",
     "ALLOWED_FUNCTIONS",
+    "MAX_DEGREE",
     "MAX_DEPTH",
     "MAX_DIGITS",
     "MAX_EXPONENT",
@@ -93,6 +95,10 @@ MAX_DEPTH = 50
 MAX_EXPONENT = 64
 #: Default limit on the number of digits of an integer literal.
 MAX_DIGITS = 40
+#: Limit on the degree of an expression in any one symbol (function calls count as degree
+#: 1): ``((x + y)**60 + 1)**60`` has exponents within MAX_EXPONENT but degree 3600 in x,
+#: and expanding or differentiating it would take minutes and gigabytes.
+MAX_DEGREE = 256
 #: Limit on the digits of the numerator or denominator of any exact number built while
 #: parsing (root extraction and factoring of larger integers get slow).
 MAX_NUMBER_DIGITS = 100
@@ -240,6 +246,94 @@ def _number_to_sympy(value: object) -> sp.Expr | None:
             return None
         return sp.Float(f)
     return None
+
+
+def _degree(value: sp.Expr) -> int:
+    """A bound on the largest degree of ``value`` in any one of its symbols (what expanding
+    it costs): a function call or a non-integer power of an atom counts 1 in each of its
+    symbols, powers multiply, products add, sums take the largest.  A product of many
+    distinct symbols has degree 1; ``((x + y)**60 + 1)**60`` has degree 3600 in x.
+    Iterative and memoised: safe on deep trees."""
+    memo: dict[sp.Basic, dict[sp.Basic, int]] = {}
+    stack: list[tuple[sp.Basic, bool]] = [(value, False)]
+    while stack:
+        e, ready = stack.pop()
+        if e in memo:
+            continue
+        if not e.free_symbols:
+            memo[e] = {}
+            continue
+        if e.is_Symbol or not (e.is_Add or e.is_Mul or e.is_Pow):
+            memo[e] = dict.fromkeys(e.free_symbols, 1)
+            continue
+        if not ready:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in memo)
+            continue
+        out: dict[sp.Basic, int] = {}
+        if e.is_Add:
+            for a in e.args:
+                for sym, d in memo[a].items():
+                    out[sym] = max(out.get(sym, 0), d)
+        elif e.is_Mul:
+            for a in e.args:
+                for sym, d in memo[a].items():
+                    out[sym] = out.get(sym, 0) + d
+        else:
+            k = math.ceil(abs(float(e.exp))) if e.exp.is_Number else 1
+            out = {sym: d * k for sym, d in memo[e.base].items()}
+            for sym in e.exp.free_symbols:
+                out[sym] = max(out.get(sym, 0), 1)
+        memo[e] = out
+    return max(memo[value].values(), default=0)
+
+
+_FLOAT_FUNCTIONS: Mapping[type, Callable[..., float]] = {
+    sp.sin: math.sin,
+    sp.cos: math.cos,
+    sp.tan: math.tan,
+    sp.asin: math.asin,
+    sp.acos: math.acos,
+    sp.atan: math.atan,
+    sp.atan2: math.atan2,
+    sp.sinh: math.sinh,
+    sp.cosh: math.cosh,
+    sp.tanh: math.tanh,
+    sp.exp: math.exp,
+    sp.log: math.log,
+}
+
+
+def _float_value(value: sp.Expr) -> float | None:
+    """A symbol-free expression in float64 arithmetic (math functions raise OverflowError
+    on overflow, products and sums give inf); None where it cannot be judged this way."""
+    if value.is_Rational:
+        return float(Fraction(int(value.p), int(value.q)))
+    if isinstance(value, sp.Float):
+        return float(value)
+    if value is sp.pi:
+        return math.pi
+    if value is sp.E:
+        return math.e
+    if value.is_Add or value.is_Mul:
+        parts = [_float_value(a) for a in value.args]
+        if any(p is None for p in parts):
+            return None
+        return math.fsum(parts) if value.is_Add else math.prod(parts)  # type: ignore[arg-type]
+    if value.is_Pow:
+        base, exp = _float_value(value.base), _float_value(value.exp)
+        if base is None or exp is None:
+            return None
+        if base < 0 and exp != int(exp):
+            return None
+        return math.pow(base, exp) if base != 0 or exp > 0 else None
+    fn = _FLOAT_FUNCTIONS.get(value.func)
+    if fn is None:
+        return None
+    args = [_float_value(a) for a in value.args]
+    if any(a is None for a in args):
+        return None
+    return fn(*args)  # type: ignore[arg-type]
 
 
 class _Source:
@@ -449,6 +543,8 @@ class _Parser:
         if isinstance(value, float):
             if not math.isfinite(value):
                 refuse("float literal '{snippet}' is out of range")
+            if value == 0.0 and re.search(r"[1-9]", src.snippet(node).lower().split("e")[0]):
+                refuse("float literal '{snippet}' underflows to 0 in float64")
             return
         refuse("literal '{snippet}' is not allowed")  # pragma: no cover
 
@@ -612,6 +708,10 @@ class _Parser:
             for op, _, value in operands:
                 result = _PY_OPERATORS[type(op)](result, value)
                 self._check_numbers(node, result)
+            self._check_powers(node, result)
+            self._check_constant_range(node, result)
+            if group == "*" and result.free_symbols and _degree(result) > MAX_DEGREE:
+                self._too_high(node, result)
             return result
         if group == "+":
             result = sp.Add(first, *(v if isinstance(op, ast.Add) else -v for op, _, v in operands))
@@ -625,7 +725,19 @@ class _Parser:
                 *(v if isinstance(op, ast.Mult) else sp.Pow(v, -1) for op, _, v in operands),
             )
         self._check_numbers(node, result)
+        self._check_powers(node, result)
+        self._check_constant_range(node, result)
+        if group == "*" and result.free_symbols and _degree(result) > MAX_DEGREE:
+            self._too_high(node, result)
         return result
+
+    def _too_high(self, node: ast.AST, value: sp.Expr) -> NoReturn:
+        snippet = self.src.snippet(node)
+        self.src.fail(
+            node,
+            f"'{snippet}' has degree {_degree(value)} in a symbol (limit {MAX_DEGREE})",
+            snippet,
+        )
 
     def _power(self, node: ast.BinOp) -> sp.Expr:
         src = self.src
@@ -645,6 +757,14 @@ class _Parser:
                 estimate = _weight(base) * abs(int(exponent.p))
                 if estimate > _MAX_NUMBER_BITS:
                     self._too_large(node, estimate)
+        if exponent.is_Number and base.free_symbols:
+            degree = _degree(base) * math.ceil(abs(float(exponent)))
+            if degree > MAX_DEGREE:
+                src.fail(
+                    node,
+                    f"'{src.snippet(node)}' has degree {degree} in a symbol (limit {MAX_DEGREE})",
+                    src.snippet(node),
+                )
         result = base**exponent
         self._check_value(node, result)
         return result
@@ -655,6 +775,58 @@ class _Parser:
         result = ALLOWED_FUNCTIONS[node.func.id](*args)
         self._check_value(node, result)
         return result
+
+    def _check_powers(self, node: ast.AST, value: sp.Expr) -> None:
+        """Refuse a power that sympy merged past the exponent limit (``(y**64)**64`` is
+        ``y**4096``, ``y**60*y**60`` is ``y**120``), among the terms and factors at the top
+        of ``value`` (its children were checked when they were built)."""
+        for term in value.args if value.is_Add else (value,):
+            for factor in term.args if term.is_Mul else (term,):
+                if factor.is_Pow and factor.exp.is_Number and factor.base.free_symbols:
+                    if abs(factor.exp) > self.max_exponent:
+                        snippet = self.src.snippet(node)
+                        self.src.fail(
+                            node,
+                            f"'{snippet}' builds the power {_shorten(str(factor))}: exponent"
+                            f" {factor.exp} (limit max_exponent={self.max_exponent})",
+                            snippet,
+                        )
+
+    def _check_constant_range(
+        self, node: ast.AST, value: sp.Expr, coefficient: sp.Expr | None = None
+    ) -> None:
+        """Refuse a symbol-free value outside the range of float64 (``exp(exp(100))``,
+        ``1e308*1e308``): generated code could not hold it, and evaluating it exactly
+        can take minutes.  Evaluated in float64 with overflow checks, never by evalf."""
+        if value.free_symbols or value.atoms(sp.core.function.AppliedUndef):
+            # the numbers at the top: a coefficient merged by a product (m*1e308*1e308)
+            for term in value.args if value.is_Add else (value,):
+                for factor in term.args if term.is_Mul else (term,):
+                    if factor.is_Number:
+                        self._check_constant_range(node, factor, factor)
+            return
+        try:
+            x = _float_value(value)
+        except (OverflowError, ValueError, ZeroDivisionError):
+            x = math.inf
+        snippet = self.src.snippet(node)
+        subject = (
+            f"'{snippet}' is a constant"
+            if coefficient is None
+            else f"'{snippet}' has the coefficient {sp.N(coefficient, 3)},"
+        )
+        if x is not None and not math.isfinite(x):
+            self.src.fail(
+                node,
+                f"{subject} outside the range of float64 (magnitude above about 1.8e308)",
+                snippet,
+            )
+        if x == 0.0 and value.is_zero is False:
+            self.src.fail(
+                node,
+                f"{subject} nonzero but below the range of float64 (it underflows to 0)",
+                snippet,
+            )
 
     def _check_value(self, node: ast.AST, value: sp.Expr) -> None:
         """Refuse undefined or complex values, and too large numbers, made by ``node``."""
@@ -672,6 +844,8 @@ class _Parser:
                 src.snippet(node),
             )
         self._check_numbers(node, value)
+        self._check_powers(node, value)
+        self._check_constant_range(node, value)
 
     def _check_numbers(self, node: ast.AST, value: sp.Expr) -> None:
         """Refuse an exact number too large, among the numbers ``node`` can have made.
