@@ -359,21 +359,26 @@ def build_plan(
     state = (*q, TIME)
     velocity_set = set(v)
 
+    prepared: dict[sp.Expr, sp.Expr] = {}
+
     def prepare(e: sp.Expr) -> sp.Expr:
         """Inputs and constants substituted; a velocity-free entry (metric, gradients,
         one-forms, projectors) in stable form: numerator and denominator factored, so a
         difference such as a^2 - b^2 is evaluated as (a - b)(a + b), without cancellation
         (see :mod:`symmech.impacts.stability`).  Velocity-dependent entries keep their
         structure (the sparse forcing, the stable impact maps)."""
-        e = inputs.substitute(e)
-        e = e.xreplace(exact) if exact else e
+        if e in prepared:  # the metric's entries recur: symmetry, and in every solve
+            return prepared[e]
+        out = inputs.substitute(e)
+        out = out.xreplace(exact) if exact else out
         if (
-            not e.is_number
-            and not (e.free_symbols & velocity_set)
-            and sp.count_ops(e) <= STABLE_ENTRY_MAX_OPS
+            not out.is_number
+            and not (out.free_symbols & velocity_set)
+            and sp.count_ops(out) <= STABLE_ENTRY_MAX_OPS
         ):
-            e = stable_coefficient(e, state)
-        return e
+            out = stable_coefficient(out, state)
+        prepared[e] = out
+        return out
 
     def add(
         name: str,
