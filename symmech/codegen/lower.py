@@ -121,6 +121,12 @@ class LoweredFunction:
     expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
 
     @property
+    def one_state_fast(self) -> bool:
+        """Whether one-state calls may take the fast path (a function of the state arrays
+        and the parameters only: no time, no inputs)."""
+        return not self.takes_time and not self.takes_inputs
+
+    @property
     def arguments(self) -> tuple[str, ...]:
         """The argument names in order: the state arrays, then p, t, u if taken."""
         extra = (

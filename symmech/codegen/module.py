@@ -373,7 +373,7 @@ def _c_raw(
         return arrays[-1].reshape(out_shape).copy()
 
     fast: Fast | None = None
-    if not spec.takes_time and not spec.takes_inputs:
+    if spec.one_state_fast:
         # what the fast path accepts: float64 (or int64) vectors of the right length, lists
         # or tuples of that length; anything else goes the general way
         checks = [(k, (k,)) for k in sizes]
@@ -489,7 +489,7 @@ EXTENSION_TEMPLATE = "c/python_module.c.jinja"
 def extension_source(code: GeneratedCode, module: str) -> str:
     """The C source of the CPython extension ``module`` of ``code`` (template
     ``c/python_module.c.jinja``): a one-state entry point for each function of the state
-    and the parameters only (``takes_time`` and ``takes_inputs`` false)."""
+    and the parameters only (``LoweredFunction.one_state_fast``)."""
     from symmech import __version__
     from symmech.codegen.backends import environment
 
@@ -513,7 +513,7 @@ def extension_source(code: GeneratedCode, module: str) -> str:
                     "dims": list(f.out_shape),
                 }
                 for f in code.functions
-                if not f.takes_time and not f.takes_inputs
+                if f.one_state_fast
             ],
         )
     )
@@ -535,7 +535,7 @@ def _extension(
     includes, missing = extension_includes()
     if missing:
         return None, f"ctypes (no CPython extension: {missing})"
-    if all(f.takes_time or f.takes_inputs for f in code.functions):
+    if not any(f.one_state_fast for f in code.functions):
         return None, "ctypes (no function of the state and parameters only)"
     cc = find_compiler(compiler)
     digest = hashlib.sha256(

@@ -37,6 +37,7 @@ prints it for one backend (C or NumPy).
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -511,13 +512,15 @@ def trace_step(
 # --------------------------------------------------------------------------- printing
 
 
-class Dialect:
-    """How one backend prints a :class:`Program` (subclassed per backend)."""
+class Dialect(ABC):
+    """How one backend prints a :class:`Program`: a subclass gives the backend's syntax
+    (:meth:`ref`, :meth:`let`, :meth:`finite`, :meth:`positive`, :meth:`store`)."""
 
     sqrt = "sqrt"
 
+    @abstractmethod
     def ref(self, r: Ref) -> str:
-        raise NotImplementedError
+        """A run-time value: a local by name, or an entry of a state array."""
 
     def number(self, x: float) -> str:
         """A literal that reads back as ``x`` (a zero is printed ``0.0``, whatever its sign)."""
@@ -568,25 +571,25 @@ class Dialect:
                 out.append(self.store(st[1], self.expr(st[2])))
         return out
 
+    @abstractmethod
     def let(self, name: str, expr: str) -> str:
         """A local holding ``expr``."""
-        raise NotImplementedError
 
+    @abstractmethod
     def finite(self, refs: Sequence[str]) -> list[str]:
         """Fail (SYMMECH_NONFINITE) unless every value is finite."""
-        raise NotImplementedError
 
+    @abstractmethod
     def positive(self, pivot: str) -> list[str]:
         """Fail (SYMMECH_NOT_SPD) unless the pivot is positive."""
-        raise NotImplementedError
 
     def allocate(self, out_shape: tuple[int, ...]) -> list[str]:
         """Whatever must precede the first store into ``out``."""
         return []
 
+    @abstractmethod
     def store(self, index: int, expr: str) -> str:
         """Entry ``index`` (row-major) of the output."""
-        raise NotImplementedError
 
 
 class CDialect(Dialect):

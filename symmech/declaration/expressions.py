@@ -62,7 +62,7 @@ import operator
 import re
 import unicodedata
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from fractions import Fraction
 from types import MappingProxyType
 from typing import NoReturn
@@ -203,15 +203,22 @@ def _bits(r: sp.Rational) -> int:
     return max(int(r.p).bit_length(), int(r.q).bit_length())
 
 
+def _top_factors(value: sp.Expr) -> Iterator[sp.Expr]:
+    """The factors at the top of ``value``, looking through one Add, then one Mul: where
+    sympy's automatic evaluation leaves what it merges (coefficients, constant terms,
+    powers of a common base)."""
+    for term in value.args if value.is_Add else (value,):
+        yield from term.args if term.is_Mul else (term,)
+
+
 def _top_numbers(value: sp.Expr) -> list[sp.Rational]:
     """The exact numbers at the top of ``value``: constant terms, coefficients, numeric bases
     of powers (looking through one Add, then one Mul, then one Pow)."""
     found = []
-    for term in value.args if value.is_Add else (value,):
-        for factor in term.args if term.is_Mul else (term,):
-            number = factor.base if factor.is_Pow else factor
-            if number.is_Rational:
-                found.append(number)
+    for factor in _top_factors(value):
+        number = factor.base if factor.is_Pow else factor
+        if number.is_Rational:
+            found.append(number)
     return found
 
 
@@ -708,10 +715,7 @@ class _Parser:
             for op, _, value in operands:
                 result = _PY_OPERATORS[type(op)](result, value)
                 self._check_numbers(node, result)
-            self._check_powers(node, result)
-            self._check_constant_range(node, result)
-            if group == "*" and result.free_symbols and _degree(result) > MAX_DEGREE:
-                self._too_high(node, result)
+            self._check_merged(node, result, product=group == "*")
             return result
         if group == "+":
             result = sp.Add(first, *(v if isinstance(op, ast.Add) else -v for op, _, v in operands))
@@ -725,18 +729,13 @@ class _Parser:
                 *(v if isinstance(op, ast.Mult) else sp.Pow(v, -1) for op, _, v in operands),
             )
         self._check_numbers(node, result)
-        self._check_powers(node, result)
-        self._check_constant_range(node, result)
-        if group == "*" and result.free_symbols and _degree(result) > MAX_DEGREE:
-            self._too_high(node, result)
+        self._check_merged(node, result, product=group == "*")
         return result
 
-    def _too_high(self, node: ast.AST, value: sp.Expr) -> NoReturn:
+    def _too_high(self, node: ast.AST, degree: int) -> NoReturn:
         snippet = self.src.snippet(node)
         self.src.fail(
-            node,
-            f"'{snippet}' has degree {_degree(value)} in a symbol (limit {MAX_DEGREE})",
-            snippet,
+            node, f"'{snippet}' has degree {degree} in a symbol (limit {MAX_DEGREE})", snippet
         )
 
     def _power(self, node: ast.BinOp) -> sp.Expr:
@@ -760,11 +759,7 @@ class _Parser:
         if exponent.is_Number and base.free_symbols:
             degree = _degree(base) * math.ceil(abs(float(exponent)))
             if degree > MAX_DEGREE:
-                src.fail(
-                    node,
-                    f"'{src.snippet(node)}' has degree {degree} in a symbol (limit {MAX_DEGREE})",
-                    src.snippet(node),
-                )
+                self._too_high(node, degree)
         result = base**exponent
         self._check_value(node, result)
         return result
@@ -776,21 +771,27 @@ class _Parser:
         self._check_value(node, result)
         return result
 
-    def _check_powers(self, node: ast.AST, value: sp.Expr) -> None:
-        """Refuse a power that sympy merged past the exponent limit (``(y**64)**64`` is
-        ``y**4096``, ``y**60*y**60`` is ``y**120``), among the terms and factors at the top
-        of ``value`` (its children were checked when they were built)."""
-        for term in value.args if value.is_Add else (value,):
-            for factor in term.args if term.is_Mul else (term,):
-                if factor.is_Pow and factor.exp.is_Number and factor.base.free_symbols:
-                    if abs(factor.exp) > self.max_exponent:
-                        snippet = self.src.snippet(node)
-                        self.src.fail(
-                            node,
-                            f"'{snippet}' builds the power {_shorten(str(factor))}: exponent"
-                            f" {factor.exp} (limit max_exponent={self.max_exponent})",
-                            snippet,
-                        )
+    def _check_merged(self, node: ast.AST, value: sp.Expr, product: bool = False) -> None:
+        """Refuse what sympy's merging made of ``node``'s operands, among the factors at
+        the top of ``value`` (its children were checked when they were built): a power past
+        the exponent limit (``(y**64)**64`` is ``y**4096``, ``y**60*y**60`` is ``y**120``),
+        a number outside float64 (``m*1e308*1e308``), and for a product, a degree above
+        MAX_DEGREE in a symbol."""
+        for factor in _top_factors(value):
+            if factor.is_Pow and factor.exp.is_Number and factor.base.free_symbols:
+                if abs(factor.exp) > self.max_exponent:
+                    snippet = self.src.snippet(node)
+                    self.src.fail(
+                        node,
+                        f"'{snippet}' builds the power {_shorten(str(factor))}: exponent"
+                        f" {factor.exp} (limit max_exponent={self.max_exponent})",
+                        snippet,
+                    )
+        self._check_constant_range(node, value)
+        if product and value.free_symbols:
+            degree = _degree(value)
+            if degree > MAX_DEGREE:
+                self._too_high(node, degree)
 
     def _check_constant_range(
         self, node: ast.AST, value: sp.Expr, coefficient: sp.Expr | None = None
@@ -798,12 +799,11 @@ class _Parser:
         """Refuse a symbol-free value outside the range of float64 (``exp(exp(100))``,
         ``1e308*1e308``): generated code could not hold it, and evaluating it exactly
         can take minutes.  Evaluated in float64 with overflow checks, never by evalf."""
-        if value.free_symbols or value.atoms(sp.core.function.AppliedUndef):
+        if value.free_symbols:
             # the numbers at the top: a coefficient merged by a product (m*1e308*1e308)
-            for term in value.args if value.is_Add else (value,):
-                for factor in term.args if term.is_Mul else (term,):
-                    if factor.is_Number:
-                        self._check_constant_range(node, factor, factor)
+            for factor in _top_factors(value):
+                if factor.is_Number:
+                    self._check_constant_range(node, factor, factor)
             return
         try:
             x = _float_value(value)
@@ -844,8 +844,7 @@ class _Parser:
                 src.snippet(node),
             )
         self._check_numbers(node, value)
-        self._check_powers(node, value)
-        self._check_constant_range(node, value)
+        self._check_merged(node, value)
 
     def _check_numbers(self, node: ast.AST, value: sp.Expr) -> None:
         """Refuse an exact number too large, among the numbers ``node`` can have made.

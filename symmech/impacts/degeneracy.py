@@ -141,19 +141,15 @@ def points_on_wall(
     other values are kept.  A point where no root is found is left out (a wall that is
     never reached gives none)."""
     deps = [qj for qj in coordinates if sp.diff(psi, qj) != 0]
-    undefined = psi.atoms(sp.core.function.AppliedUndef)
     out = []
     for point in points:
-        fixed_undefined = {u: point[u] for u in undefined if u in point}
         for qj in deps:
-            rest = {k: v for k, v in point.items() if k != qj}
-            f_expr = psi.xreplace({**fixed_undefined, **rest})
+            # the other coordinates, parameters, t and arbitrary functions of t (f(t) is a
+            # key of the point: xreplace replaces it whole) fixed at their sampled values
+            f_expr = psi.xreplace({k: v for k, v in point.items() if k != qj})
             if f_expr.free_symbols - {qj} or f_expr.atoms(sp.core.function.AppliedUndef):
-                continue
-            try:
-                fn = sp.lambdify(qj, f_expr, "mpmath")
-            except (TypeError, ValueError, SyntaxError, NameError):  # pragma: no cover
-                continue
+                continue  # something without a value: psi cannot be solved here
+            fn = sp.lambdify(qj, f_expr, "mpmath")
             root = None
             with mp.workdps(dps + 10):
                 for x0 in (point[qj], 0, 1, -1, 2, -2):
@@ -223,12 +219,7 @@ def check_regular(
 
     perm = [form(mu[a, :]) for a in range(mu.rows)]
     if _identically_zero(C[0, 0], points):
-        raise ImpactError(
-            f"wall {wall!r}: the gradient of psi = {_short(psi)} lies in the span of the"
-            f" permanent constraints {perm} (C = g(P grad psi, P grad psi) = 0, Carnot"
-            " paper eq. 7): every motion allowed by the constraints is tangent to the wall,"
-            " so no impact map exists"
-        )
+        raise _in_span(wall, f"the gradient of psi = {_short(psi)}", perm, "")
     k = C.rows
     verdicts = [v for v in (_singular_blocks(C, point) for point in points) if v is not None]
     for j in range(1, k if verdicts else 1):
@@ -240,14 +231,32 @@ def check_regular(
             )
             if symbolic is not None and symbolic.is_number and symbolic != 0:
                 continue
-            raise ImpactError(
-                f"wall {wall!r}: the impulsive constraint nu^{j} = {form(nu[j - 1, :])} is"
-                " linearly dependent on d psi, the permanent constraints"
-                f" {perm} and the preceding impulsive constraints (the Gram matrix"
-                f" C^AB = g(P Y^A, P Y^B) has rank < {j + 1} at every sampled point);"
-                " drop it (as Carnot paper Example 3.13 drops omega_y)"
+            raise _dependent(
+                wall,
+                f"the impulsive constraint nu^{j} = {form(nu[j - 1, :])}",
+                perm,
+                f"rank < {j + 1} at every sampled point",
+                "drop it (as Carnot paper Example 3.13 drops omega_y)",
             )
     _check_on_the_wall(C, wall, psi, perm, nu, form, g, dpsi, wall_points)
+
+
+def _in_span(wall: str, what: str, perm: list[str], where: str) -> ImpactError:
+    """d psi in the span of the permanent constraints (everywhere, or ``where``)."""
+    return ImpactError(
+        f"wall {wall!r}: {what} lies in the span of the permanent constraints {perm}"
+        f" (C = g(P grad psi, P grad psi) = 0{where}, Carnot paper eq. 7): every motion"
+        " allowed by the constraints is tangent to the wall there, so no impact map exists"
+    )
+
+
+def _dependent(wall: str, what: str, perm: list[str], rank: str, remedy: str) -> ImpactError:
+    """An impulsive constraint dependent on d psi and the constraints before it."""
+    return ImpactError(
+        f"wall {wall!r}: {what} is linearly dependent on d psi, the permanent constraints"
+        f" {perm} and the preceding impulsive constraints (the Gram matrix"
+        f" C^AB = g(P Y^A, P Y^B) has {rank}); {remedy}"
+    )
 
 
 def _check_on_the_wall(
@@ -275,12 +284,11 @@ def _check_on_the_wall(
         ratios = [_wall_gradient_ratio(C[0, 0], g, dpsi, p) for p in wall_points]
         known = [(r, p) for r, p in zip(ratios, wall_points, strict=True) if r is not None]
         if len(known) >= 2 and all(abs(r) < HADAMARD_TOLERANCE for r, _ in known):
-            raise ImpactError(
-                f"wall {wall!r}: on the wall psi = {_short(psi)} = 0 the gradient of psi lies"
-                f" in the span of the permanent constraints {perm} (C = g(P grad psi, P grad"
-                f" psi) = 0 at every point of the wall sampled, e.g. {where(known[0][1])};"
-                " Carnot paper eq. 7): no motion allowed by the constraints approaches the"
-                " wall, so no impact map exists"
+            raise _in_span(
+                wall,
+                f"on the wall psi = {_short(psi)} = 0 the gradient of psi",
+                perm,
+                f" at every point of the wall sampled, e.g. {where(known[0][1])}",
             )
     k = C.rows
     if k == 1:
@@ -289,14 +297,16 @@ def _check_on_the_wall(
     if len(verdicts) < 2:
         return
     for j in range(1, k):
+        # the first block that becomes singular names the culprit (a singular C^00 with no
+        # permanent constraints means d psi = 0 there, not a dependent nu)
         if all(v[j] for v in verdicts) and not all(v[j - 1] for v in verdicts):
-            raise ImpactError(
-                f"wall {wall!r}: on the wall psi = {_short(psi)} = 0 the impulsive constraint"
-                f" nu^{j} = {form(nu[j - 1, :])} is linearly dependent on d psi, the permanent"
-                f" constraints {perm} and the preceding impulsive constraints (C^AB has rank"
-                f" < {j + 1} at every point of the wall sampled, e.g."
-                f" {where(wall_points[0])}); drop it or write it so that it is independent"
-                " where the impact happens"
+            raise _dependent(
+                wall,
+                f"on the wall psi = {_short(psi)} = 0 the impulsive constraint"
+                f" nu^{j} = {form(nu[j - 1, :])}",
+                perm,
+                f"rank < {j + 1} at every point of the wall sampled, e.g. {where(wall_points[0])}",
+                "drop it or write it so that it is independent where the impact happens",
             )
 
 
@@ -402,6 +412,7 @@ def no_real_zeros(f: sp.Expr) -> bool:
         if isinstance(gen, (sp.sin, sp.cos)) and gen.args[0].is_real:
             return poly.count_roots(-1, 1) == 0
     except (sp.PolynomialError, NotImplementedError):  # pragma: no cover
+        # count_roots is not implemented over some domains: no verdict, keep the factor
         return False
     return False
 
