@@ -20,15 +20,21 @@ from symmech.scene import Scene
 __all__ = [
     "EXAMPLES",
     "body_pendulum_rotor",
+    "bouncing_ball",
     "bouncing_ellipse",
     "car",
     "carnot_3_7",
     "carnot_3_13",
     "carnot_4_4",
+    "disk_3_7_gravity",
+    "ellipse_gravity",
     "example",
+    "newtons_cradle",
     "pendulum_on_cart",
+    "pendulum_wall",
     "rolling_ball",
     "spinning_disk",
+    "stiff_dumbbell",
     "trig_wall",
 ]
 
@@ -253,6 +259,111 @@ def body_pendulum_rotor() -> Scene:
     )
 
 
+# ------------------------------------------------------------------ simulation scenes
+#
+# Scenes for the hybrid simulator (symmech.simulate): gravity, restitution as a parameter,
+# and the references its tests and benchmarks need (closed forms where they exist).
+
+
+def _alpha() -> sp.Symbol:
+    return sp.Symbol("alpha", nonnegative=True)
+
+
+def bouncing_ball() -> Scene:
+    """A ball (mass m) falling under gravity g onto the floor y = 0 with restitution alpha:
+    ``T = m y_dot^2 / 2``, ``V = m g y``, ``psi = y``.  Dropped from rest at height h it
+    comes to rest at ``t* = sqrt(2h/g) (1 + alpha)/(1 - alpha)`` (alpha < 1)."""
+    (y,) = coordinates("y")
+    m, g = sp.symbols("m g", positive=True)
+    return Scene(
+        (y,),
+        metric=sp.Matrix([[m]]),
+        potential=m * g * y,
+        walls=[Wall(y, restitution=_alpha(), name="floor")],
+        name="bouncing_ball",
+    )
+
+
+def ellipse_gravity() -> Scene:
+    """Text 001, section 3.1, under gravity: the ellipse (mass m, inertia I, semi-axes a, b)
+    falls onto the floor y = 0 with restitution alpha;
+    ``psi = y - sqrt(a^2 sin^2 theta + b^2 cos^2 theta)`` (support function)."""
+    x, y, th = coordinates("x y theta")
+    m, I, a, b, g = sp.symbols("m I a b g", positive=True)
+    psi = shapes.ellipse_gap((x, y), th, (a, b), shapes.Plane.axis("y"))
+    return Scene(
+        (x, y, th),
+        metric=sp.diag(m, m, I),
+        potential=m * g * y,
+        walls=[Wall(psi, restitution=_alpha(), name="floor")],
+        name="ellipse_gravity",
+    )
+
+
+def disk_3_7_gravity() -> Scene:
+    """Carnot paper, example 3.7, under gravity: the disc (radius R, mass m, inertia m k^2)
+    falls onto the rough floor y = R, rolls at each impact (``x_dot - R theta_dot = 0``)
+    and restitutes the normal velocity with alpha."""
+    x, y, th = coordinates("x y theta")
+    xd, _, thd = velocities((x, y, th))
+    m, k, R, g = sp.symbols("m k R g", positive=True)
+    wall = Wall(
+        y - R, restitution=_alpha(), impulsive_constraints=[xd - R * thd], name="rough_floor"
+    )
+    return Scene(
+        (x, y, th),
+        metric=sp.diag(m, m, m * k**2),
+        potential=m * g * y,
+        walls=[wall],
+        name="disk_3_7_gravity",
+    )
+
+
+def newtons_cradle(balls: int = 3) -> Scene:
+    """Newton's cradle as a chain of ``balls`` equal balls (mass m, radius r) on a line,
+    ``x_i`` their centres; the walls ``x_{i+1} - x_i - 2 r >= 0`` are elastic (alpha = 1)
+    by default.  Equal masses exchange their velocities at each contact."""
+    if isinstance(balls, bool) or not isinstance(balls, numbers.Integral) or balls < 2:
+        raise SceneError(f"newtons_cradle: balls must be an integer >= 2, got {balls!r}")
+    balls = int(balls)
+    xs = coordinates([f"x{i}" for i in range(balls)])
+    m, r = sp.symbols("m r", positive=True)
+    walls = [
+        Wall(xs[i + 1] - xs[i] - 2 * r, restitution=1, name=f"contact{i}") for i in range(balls - 1)
+    ]
+    return Scene(xs, metric=sp.eye(balls) * m, walls=walls, name=f"newtons_cradle_{balls}")
+
+
+def pendulum_wall() -> Scene:
+    """A pendulum (point mass m on a massless rod of length l, angle theta from the downward
+    vertical, gravity g) swinging into the vertical wall x = d (d < l):
+    ``psi = d - l sin theta``, restitution alpha."""
+    (th,) = coordinates("theta")
+    m, l, g, d = sp.symbols("m l g d", positive=True)
+    return Scene(
+        (th,),
+        metric=sp.Matrix([[m * l**2]]),
+        potential=-m * g * l * sp.cos(th),
+        walls=[Wall(d - l * sp.sin(th), restitution=_alpha(), name="wall")],
+        name="pendulum_wall",
+    )
+
+
+def stiff_dumbbell() -> Scene:
+    """A stiff scene: two masses m at heights y1 <= y2 joined by a spring of stiffness k and
+    rest length L (k up to 1e8), falling under gravity g; the lower one bounces on the floor
+    y1 = 0 with restitution alpha.  ``V = m g (y1 + y2) + k (y2 - y1 - L)^2 / 2``."""
+    y1, y2 = coordinates("y1 y2")
+    m, g, k, L = sp.symbols("m g k L", positive=True)
+    return Scene(
+        (y1, y2),
+        metric=sp.diag(m, m),
+        potential=m * g * (y1 + y2) + k * (y2 - y1 - L) ** 2 / 2,
+        walls=[Wall(y1, restitution=_alpha(), name="floor")],
+        name="stiff_dumbbell",
+    )
+
+
 EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {
     "bouncing_ellipse": (bouncing_ellipse, "text 001 §3.1: ellipse bouncing on a wall (elastic)"),
     "spinning_disk": (spinning_disk, "text 001 §3.2: spinning disk, frictional impact"),
@@ -262,6 +373,12 @@ EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {
     "rolling_ball": (rolling_ball, "slides 000: ball rolling without spinning (SO(3))"),
     "car": (car, "slides 000: car with curvature state (non-holonomic)"),
     "pendulum_on_cart_3": (lambda: pendulum_on_cart(3), "3-link pendulum on a cart"),
+    "bouncing_ball": (bouncing_ball, "bouncing ball under gravity, restitution alpha"),
+    "ellipse_gravity": (ellipse_gravity, "text 001 §3.1 ellipse falling on the floor"),
+    "disk_3_7_gravity": (disk_3_7_gravity, "Carnot ex. 3.7 disc falling on a rough floor"),
+    "newtons_cradle_3": (lambda: newtons_cradle(3), "Newton's cradle of 3 balls on a line"),
+    "pendulum_wall": (pendulum_wall, "pendulum swinging into a vertical wall"),
+    "stiff_dumbbell": (stiff_dumbbell, "stiff spring dumbbell bouncing on the floor"),
 }
 
 
