@@ -63,12 +63,17 @@ import re
 import unicodedata
 import warnings
 from collections.abc import Callable, Iterator, Mapping
-from fractions import Fraction
 from types import MappingProxyType
 from typing import NoReturn
 
 import sympy as sp
 
+from symmech.declaration.constants import (
+    MAX_NUMBER_BITS,
+    MAX_NUMBER_DIGITS,
+    constant_out_of_range,
+    range_problem,
+)
 from symmech.errors import ExpressionError
 
 __all__ = [
@@ -99,11 +104,10 @@ MAX_DIGITS = 40
 #: 1): ``((x + y)**60 + 1)**60`` has exponents within MAX_EXPONENT but degree 3600 in x,
 #: and expanding or differentiating it would take minutes and gigabytes.
 MAX_DEGREE = 256
-#: Limit on the digits of the numerator or denominator of any exact number built while
-#: parsing (root extraction and factoring of larger integers get slow).
-MAX_NUMBER_DIGITS = 100
-
-_MAX_NUMBER_BITS = math.ceil(MAX_NUMBER_DIGITS * math.log2(10))
+# MAX_NUMBER_DIGITS (from symmech.declaration.constants): limit on the digits of the
+# numerator or denominator of any exact number built while parsing (root extraction and
+# factoring of larger integers get slow).
+_MAX_NUMBER_BITS = MAX_NUMBER_BITS
 
 #: The functions a string may call: name -> sympy function.  All are smooth (analytic)
 #: where defined.  ``atan2`` takes two arguments ``(y, x)``, the others one.
@@ -293,54 +297,6 @@ def _degree(value: sp.Expr) -> int:
                 out[sym] = max(out.get(sym, 0), 1)
         memo[e] = out
     return max(memo[value].values(), default=0)
-
-
-_FLOAT_FUNCTIONS: Mapping[type, Callable[..., float]] = {
-    sp.sin: math.sin,
-    sp.cos: math.cos,
-    sp.tan: math.tan,
-    sp.asin: math.asin,
-    sp.acos: math.acos,
-    sp.atan: math.atan,
-    sp.atan2: math.atan2,
-    sp.sinh: math.sinh,
-    sp.cosh: math.cosh,
-    sp.tanh: math.tanh,
-    sp.exp: math.exp,
-    sp.log: math.log,
-}
-
-
-def _float_value(value: sp.Expr) -> float | None:
-    """A symbol-free expression in float64 arithmetic (math functions raise OverflowError
-    on overflow, products and sums give inf); None where it cannot be judged this way."""
-    if value.is_Rational:
-        return float(Fraction(int(value.p), int(value.q)))
-    if isinstance(value, sp.Float):
-        return float(value)
-    if value is sp.pi:
-        return math.pi
-    if value is sp.E:
-        return math.e
-    if value.is_Add or value.is_Mul:
-        parts = [_float_value(a) for a in value.args]
-        if any(p is None for p in parts):
-            return None
-        return math.fsum(parts) if value.is_Add else math.prod(parts)  # type: ignore[arg-type]
-    if value.is_Pow:
-        base, exp = _float_value(value.base), _float_value(value.exp)
-        if base is None or exp is None:
-            return None
-        if base < 0 and exp != int(exp):
-            return None
-        return math.pow(base, exp) if base != 0 or exp > 0 else None
-    fn = _FLOAT_FUNCTIONS.get(value.func)
-    if fn is None:
-        return None
-    args = [_float_value(a) for a in value.args]
-    if any(a is None for a in args):
-        return None
-    return fn(*args)  # type: ignore[arg-type]
 
 
 class _Source:
@@ -793,40 +749,33 @@ class _Parser:
             if degree > MAX_DEGREE:
                 self._too_high(node, degree)
 
-    def _check_constant_range(
-        self, node: ast.AST, value: sp.Expr, coefficient: sp.Expr | None = None
-    ) -> None:
+    def _check_constant_range(self, node: ast.AST, value: sp.Expr) -> None:
         """Refuse a symbol-free value outside the range of float64 (``exp(exp(100))``,
-        ``1e308*1e308``): generated code could not hold it, and evaluating it exactly
-        can take minutes.  Evaluated in float64 with overflow checks, never by evalf."""
-        if value.free_symbols:
-            # the numbers at the top: a coefficient merged by a product (m*1e308*1e308)
-            for factor in _top_factors(value):
-                if factor.is_Number:
-                    self._check_constant_range(node, factor, factor)
+        ``1e308*1e308``) and, in a value with symbols, a coefficient merged out of it by a
+        product (``m*1e308*1e308``, ``exp(709)*exp(709)*x`` is ``x*exp(1418)``): generated
+        code could not hold it, and evaluating it exactly can take minutes.  Judged by
+        :func:`symmech.declaration.constants.range_problem`, never by evalf."""
+        if not value.free_symbols:
+            reason = range_problem(value)
+            if reason is not None and not value.is_Rational:
+                snippet = self.src.snippet(node)
+                self.src.fail(node, f"'{snippet}' is a constant {reason}", snippet)
             return
-        try:
-            x = _float_value(value)
-        except (OverflowError, ValueError, ZeroDivisionError):
-            x = math.inf
-        snippet = self.src.snippet(node)
-        subject = (
-            f"'{snippet}' is a constant"
-            if coefficient is None
-            else f"'{snippet}' has the coefficient {sp.N(coefficient, 3)},"
-        )
-        if x is not None and not math.isfinite(x):
-            self.src.fail(
-                node,
-                f"{subject} outside the range of float64 (magnitude above about 1.8e308)",
-                snippet,
-            )
-        if x == 0.0 and value.is_zero is False:
-            self.src.fail(
-                node,
-                f"{subject} nonzero but below the range of float64 (it underflows to 0)",
-                snippet,
-            )
+        for term in value.args if value.is_Add else (value,):
+            factors = term.args if term.is_Mul else (term,)
+            constant = [f for f in factors if not f.free_symbols]
+            if not constant:
+                continue
+            coefficient = sp.Mul(*constant, evaluate=False) if len(constant) > 1 else constant[0]
+            reason = range_problem(coefficient)
+            if reason is not None and not coefficient.is_Rational:
+                snippet = self.src.snippet(node)
+                shown = (
+                    sp.N(coefficient, 3)
+                    if coefficient.is_Number
+                    else _shorten(str(sp.Mul(*constant)))
+                )
+                self.src.fail(node, f"'{snippet}' has the coefficient {shown}, {reason}", snippet)
 
     def _check_value(self, node: ast.AST, value: sp.Expr) -> None:
         """Refuse undefined or complex values, and too large numbers, made by ``node``."""
@@ -869,6 +818,15 @@ class _Parser:
 
     def finish(self, root: ast.expr, value: sp.Expr) -> sp.Expr:
         self._check_value(root, value)
+        # every constant of the result as sympy merged it, not only those at the top
+        bad = constant_out_of_range(value)
+        if bad is not None and not bad.constant.is_Rational:
+            snippet = self.src.snippet(root)
+            self.src.fail(
+                root,
+                f"'{snippet}' holds the constant {_shorten(str(bad.constant))}, {bad.reason}",
+                snippet,
+            )
         for number in value.atoms(sp.Rational):
             if _bits(number) > _MAX_NUMBER_BITS:
                 self._too_large(root, _bits(number))
