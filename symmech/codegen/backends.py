@@ -11,7 +11,11 @@ Adding a backend is a recipe (SymForce style):
 Templates are rendered by a strict Jinja environment (``StrictUndefined``, ``trim_blocks``,
 ``lstrip_blocks``, ``keep_trailing_newline``); every output file starts with a stamp naming
 the templates it was rendered from (its template and those it includes or imports, see
-:func:`templates_used`) and saying it must not be edited.
+:func:`templates_used`) and saying it must not be edited.  Text of the scene (names,
+printed expressions, notes) reaches a template raw and is escaped there for the place it
+lands in by the filters of :data:`ESCAPE_FILTERS` (:mod:`symmech.codegen.escape`):
+``c_comment``, ``c_string``, ``py_doc`` (docstrings), ``py_comment``.  Everything else a
+template prints is code built by symmech (identifiers, printed expressions, integers).
 """
 
 from __future__ import annotations
@@ -26,10 +30,27 @@ import jinja2
 import jinja2.meta
 import sympy as sp
 
+from symmech.codegen.escape import c_comment, c_string, python_comment, python_docstring
 from symmech.codegen.printers import SymmechCPrinter, SymmechNumPyPrinter
 from symmech.codegen.unroll import CDialect, Dialect, NumPyDialect
 
-__all__ = ["BACKENDS", "STEP_DOCS", "Backend", "environment", "template_root", "templates_used"]
+__all__ = [
+    "BACKENDS",
+    "ESCAPE_FILTERS",
+    "STEP_DOCS",
+    "Backend",
+    "environment",
+    "template_root",
+    "templates_used",
+]
+
+#: The Jinja filters escaping text for the place it lands in (one per target).
+ESCAPE_FILTERS: dict[str, Callable[[object], str]] = {
+    "c_comment": c_comment,
+    "c_string": c_string,
+    "py_doc": python_docstring,
+    "py_comment": python_comment,
+}
 
 #: One-line descriptions of the linear-algebra steps, printed in function headers.
 STEP_DOCS = {
@@ -118,8 +139,9 @@ def template_root() -> Path:
 
 @cache
 def environment() -> jinja2.Environment:
-    """The strict Jinja environment over :func:`template_root`."""
-    return jinja2.Environment(
+    """The strict Jinja environment over :func:`template_root`, with the escape filters
+    of :data:`ESCAPE_FILTERS`."""
+    env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(template_root())),
         undefined=jinja2.StrictUndefined,
         trim_blocks=True,
@@ -127,6 +149,8 @@ def environment() -> jinja2.Environment:
         keep_trailing_newline=True,
         autoescape=False,
     )
+    env.filters.update(ESCAPE_FILTERS)
+    return env
 
 
 @cache

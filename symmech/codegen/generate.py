@@ -19,9 +19,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
-from symmech.codegen.lower import LoweredFunction, Names, comment_text, lower
+from symmech.codegen.escape import file_name
+from symmech.codegen.lower import LoweredFunction, Names, lower
 from symmech.codegen.plan import CodegenError, ScenePlan, build_plan
-from symmech.codegen.printers import identifier
 
 if TYPE_CHECKING:
     from symmech.codegen.module import SceneModule
@@ -122,27 +122,27 @@ def generate(
         )
     lowered = tuple(done.values())
     omitted = (*plan.omitted, *_argument_notes(plan, lowered))
-    scene_id = identifier(scene.name, "", set())
-    stem = f"symmech_{scene_id}"
+    stem = f"symmech_{file_name(scene.name)}"
     from symmech import __version__
 
     steps = sorted({f.step for f in lowered if f.step})
     context = {
-        "scene": comment_text(scene.name),
+        # text: raw here, escaped by the templates' filters (symmech.codegen.escape)
+        "scene": scene.name,
         "n": plan.n,
         "m": plan.m,
-        "walls": [comment_text(repr(w)) for w in plan.walls],
+        "walls": [repr(w) for w in plan.walls],
         "strategy": plan.strategy,
-        "coordinates": [comment_text(str(s)) for s in plan.coordinates],
-        "velocities": [comment_text(str(s)) for s in plan.velocities],
-        "parameters": [comment_text(str(s)) for s in plan.parameters],
-        "inputs": [comment_text(str(a)) for _, a in plan.inputs],
+        "coordinates": [str(s) for s in plan.coordinates],
+        "velocities": [str(s) for s in plan.velocities],
+        "parameters": [str(s) for s in plan.parameters],
+        "inputs": [str(a) for _, a in plan.inputs],
         "n_inputs": len(plan.inputs),
-        "constants": [comment_text(f"{s} = {v}") for s, v in plan.constants],
+        "constants": [f"{s} = {v}" for s, v in plan.constants],
         "uses_time": any(f.takes_time for f in lowered),
         "uses_parameters": any(f.takes_parameters for f in lowered),
         "uses_inputs": any(f.takes_inputs for f in lowered),
-        "omitted": [comment_text(o) for o in omitted],
+        "omitted": list(omitted),
         "functions": list(lowered),
         "callees": {f.name: f for f in lowered},
         "steps": steps,

@@ -53,14 +53,7 @@ from symmech.codegen.printers import (
 from symmech.codegen.unroll import STEP_INPUTS, Dialect, trace_step
 from symmech.declaration.symbols import t as TIME
 
-__all__ = ["LoweredFunction", "Names", "comment_text", "lower", "step_flops"]
-
-
-def comment_text(text: str) -> str:
-    """``text`` made safe inside a C block comment and a Python docstring: one line, no
-    ``*/``, no triple quote, backslashes doubled (a docstring shows them once)."""
-    text = " ".join(str(text).split())
-    return text.replace("\\", "\\\\").replace("*/", "* /").replace('"' * 3, "'" * 3)
+__all__ = ["LoweredFunction", "Names", "lower", "step_flops"]
 
 
 @dataclass(frozen=True)
@@ -386,8 +379,8 @@ def lower(
     return LoweredFunction(
         name=f.name,
         kind=f.kind,
-        doc=comment_text(f.doc),
-        equation=comment_text(f.equation),
+        doc=f.doc,  # raw text: the templates escape it (symmech.codegen.escape)
+        equation=f.equation,
         wall=f.wall,
         wall_index=f.wall_index,
         state=f.state,

@@ -538,9 +538,17 @@ def _extension(
     if not any(f.one_state_fast for f in code.functions):
         return None, "ctypes (no function of the state and parameters only)"
     cc = find_compiler(compiler)
+    # the key covers the extension's own source (its template may change while the
+    # library's sources do not), rendered with a placeholder module name
     digest = hashlib.sha256(
         "\0".join(
-            [library_key(cc, flags, code.files), sys.version, np.__version__, *includes]
+            [
+                library_key(cc, flags, code.files),
+                extension_source(code, "_symmech_ext"),
+                sys.version,
+                np.__version__,
+                *includes,
+            ]
         ).encode()
     )
     name = f"_symmech_ext_{digest.hexdigest()[:20]}"
