@@ -185,20 +185,25 @@ def test_metric_of_a_kinetic_energy_is_checked():
 
 def test_huge_entries_are_handled_without_warnings():
     e = sp.exp
-    accepted((x,), metric=[[e(1000)]])
+    # entries that overflow float64 at every sampled point are judged in mpmath
+    big = 1000 + x**2
+    accepted((x,), metric=[[e(big)]])
     accepted((x,), metric=[[1e308]])
     accepted((x, y), metric=[[1e308, 0], [0, 1e-308]])  # scale-free: positive definite
-    accepted((x,), metric=[[e(e(e(1000)))]])  # exp of a real number is positive
-    # det = e^1000 - 1 > 0 and e^1000 > 0: positive definite (evaluated in mpmath)
-    accepted((x, y), metric=[[e(1000), 1], [1, 1]])
+    accepted((x,), metric=[[e(e(e(big)))]])  # exp of a real number is positive
+    # det = e^(1000 + x^2) - 1 > 0 and e^(1000 + x^2) > 0: positive definite (in mpmath)
+    accepted((x, y), metric=[[e(big), 1], [1, 1]])
     accepted((x, y), metric=[[1e308, 1e307], [1e307, 1e308]])
-    # det = e^1000 - e^1200 < 0: indefinite
-    err = refused((x, y), metric=[[e(1000), e(600)], [e(600), 1]])
+    # det = e^(1000 + x^2) - e^(1200 + 2 x^2) < 0: indefinite
+    err = refused((x, y), metric=[[e(big), e(600 + x**2)], [e(600 + x**2), 1]])
     assert has(err, "metric", "not positive definite")
     # no finite value in any arithmetic: said so, naming the entry
-    err = refused((x, y), metric=[[e(e(e(1000))), 1], [1, 1]])
-    assert has(err, "metric: entry [0,0] = exp(exp(exp(1000)))", "overflows float64")
+    err = refused((x, y), metric=[[e(e(e(big))), 1], [1, 1]])
+    assert has(err, "metric: entry [0,0] = exp(exp(exp(x**2 + 1000)))", "overflows float64")
     assert has(err, "positive definiteness cannot be checked")
+    # a constant float64 cannot hold is refused whatever its sign (generated code holds it)
+    err = refused((x,), metric=[[e(1000)]])
+    assert has(err, "metric: entry [0,0] = exp(1000): holds the constant exp(1000)", "float64")
     for bad in (sp.zoo, sp.oo, sp.nan):
         err = refused((x, y), metric=[[bad, 0], [0, 1]])
         assert has(err, f"metric: entry [0,0] = {bad}", "cannot be checked"), err.problems

@@ -62,6 +62,7 @@ from dataclasses import dataclass
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech.declaration.admissible import NON_SMOOTH, expression_problems
 from symmech.declaration.expressions import to_expression
 from symmech.declaration.numeric import (
     EvaluationError,
@@ -83,25 +84,6 @@ from symmech.declaration.wall import Wall
 from symmech.errors import SceneError
 
 __all__ = ["NON_SMOOTH", "Declaration", "ResolvedWall", "declare"]
-
-#: Functions that make an expression non-smooth; refused everywhere in a scene, because
-#: Christoffel symbols, gradients and impact maps need derivatives.
-NON_SMOOTH = (
-    sp.Abs,
-    sp.sign,
-    sp.Piecewise,
-    sp.Heaviside,
-    sp.floor,
-    sp.ceiling,
-    sp.Max,
-    sp.Min,
-    sp.frac,
-    sp.Mod,
-    sp.DiracDelta,
-    sp.re,
-    sp.im,
-    sp.arg,
-)
 
 _SAMPLES = 4
 #: ... and points away from the origin (angles near +-pi), see sampling.sample_points.
@@ -804,7 +786,10 @@ class _SymbolRules:
                 f"{f.label}: contains non-smooth functions {bad_fn}; symmech needs smooth"
                 " expressions"
             )
-        f.ok = not bad
+        found = expression_problems(f.value, skip=NON_SMOOTH)
+        for p in found:
+            problems.add(f"{f.label}: {p}")
+        f.ok = not (bad or bad_fn or found)
 
     def default_parameters(self, problems: _Problems) -> tuple[sp.Symbol, ...]:
         """Every other free symbol, sorted by name; two symbols sharing a name are refused."""

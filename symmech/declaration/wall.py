@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from symmech.declaration.admissible import NON_SMOOTH, expression_problems
 from symmech.declaration.expressions import to_expression
 from symmech.errors import SceneError
 
@@ -105,6 +106,9 @@ class Wall:
                 psi_expr = to_expression(psi, None, field=f"{label}: psi")
             except ValueError as exc:
                 raise SceneError(str(exc)) from exc
+            found = expression_problems(psi_expr, skip=NON_SMOOTH)
+            if found:
+                raise SceneError([f"{label}: psi {p}" for p in found])
         if isinstance(impulsive_constraints, (str, sp.Basic)) and not isinstance(
             impulsive_constraints, sp.MatrixBase
         ):
