@@ -15,7 +15,14 @@ from symmech.declaration import shapes
 from symmech.declaration.expressions import parse_expression
 from symmech.declaration.symbols import coordinates, t, velocities
 from symmech.declaration.wall import Wall
-from symmech.errors import ExpressionError, ImpactError, SceneError, SymmechError
+from symmech.errors import (
+    ExpressionError,
+    ImpactError,
+    SceneError,
+    SymmechError,
+    SymmechWarning,
+    UndecidedWarning,
+)
 from symmech.geometry.lie import bracket_rank, hat, is_involutive, lie_bracket
 from symmech.scene import Scene
 from symmech.scenefile import (
@@ -49,6 +56,8 @@ __all__ = [
     "SceneFile",
     "SceneFileError",
     "SymmechError",
+    "SymmechWarning",
+    "UndecidedWarning",
     "Wall",
     "__version__",
     "bracket_rank",

@@ -14,6 +14,8 @@ __all__ = [
     "ImpactError",
     "SceneError",
     "SymmechError",
+    "SymmechWarning",
+    "UndecidedWarning",
 ]
 
 
@@ -50,3 +52,15 @@ class SceneError(SymmechError, ValueError):
 
 class ImpactError(SymmechError, ValueError):
     """An impact map cannot be derived (degenerate wall, dependent constraints, ...)."""
+
+
+class SymmechWarning(UserWarning):
+    """Base class of every warning issued by symmech."""
+
+
+class UndecidedWarning(SymmechWarning):
+    """A property of a declaration that symmech could neither prove nor refute.
+
+    The declaration is accepted; the message names the object, the property, what was
+    checked (proofs tried, points searched) and what is left undecided.
+    """
