@@ -1,0 +1,616 @@
+"""One-step integrators of the hybrid simulator: explicit Runge-Kutta pairs and Rodas4.
+
+A stepper advances ``y' = f(t, y)`` by one step ``h`` (negative to integrate backwards) from
+``(t0, y0)`` with ``f0 = f(t0, y0)`` given, and returns a :class:`Step`: the new state, its
+derivative (for the next step), a scaled error norm (accept when ``<= 1``), the step's
+continuous output ``dense(theta) = y(t0 + theta h)`` and the number of right-hand-side
+calls.  It keeps no state between steps: step-size control is the caller's, with
+:func:`initial_step` for the first step and :class:`Controller` for the next ones.
+
+Methods (coefficients in :mod:`symmech.simulate.tableaux`, sources cited there):
+
+====== ===== ===== ====== =================================================================
+name   order error dense  notes
+====== ===== ===== ====== =================================================================
+dop853 8     7     7      12 stages + 3 lazy dense stages, combined 5th/3rd-order estimate
+tsit5  5     4     4      7 stages (FSAL)
+rk45   5     4     4      Dormand-Prince, Shampine's dense output, 7 stages (FSAL)
+rk4    4     --    3      fixed step, cubic Hermite dense output, ``error = 0``
+rodas4 4     3     3      L-stable, stiffly accurate Rosenbrock; needs ``jac``
+====== ===== ===== ====== =================================================================
+
+The error norm is ``sqrt(mean((err_i / scale_i)^2))`` with ``scale_i = atol_i + rtol
+max(|y0_i|, |y1_i|)`` (HNW I, eq. II.(4.11); SciPy's convention).  A step whose state,
+error or derivative is not finite reports ``error = inf``: the caller rejects it and
+shrinks ``h``, it is never raised.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from ..errors import SymmechError
+from .tableaux import DOP853, DOP853_EXTRAS, RK4, RK45, RODAS4, TSIT5, ExplicitTableau
+
+__all__ = [
+    "METHODS",
+    "Controller",
+    "Dense",
+    "Step",
+    "Stepper",
+    "StepperError",
+    "c_tableau",
+    "check_tolerances",
+    "initial_step",
+    "stepper",
+]
+
+Rhs = Callable[[float, np.ndarray], np.ndarray]
+Jac = Callable[[float, np.ndarray], np.ndarray]
+
+
+class StepperError(SymmechError, ValueError):
+    """Bad input to a stepper: unknown method, bad step size or tolerances, a right-hand
+    side or Jacobian of the wrong shape, an implicit method without its Jacobian."""
+
+
+class Dense(Protocol):
+    """The continuous output of one step: ``dense(theta) = y(t0 + theta h)``.
+
+    Accurate to the method's dense order for ``theta`` in ``[0, 1]``; outside it the
+    polynomial is extrapolated.
+    """
+
+    t0: float
+    h: float
+
+    def __call__(self, theta: float) -> np.ndarray: ...
+
+
+@dataclass
+class Step:
+    """The result of one step from ``t0`` to ``t0 + h``."""
+
+    y: np.ndarray  #: solution at t0 + h
+    f: np.ndarray  #: f(t0 + h, y), for the next step
+    error: float  #: scaled RMS error norm; accept when <= 1 (inf: reject)
+    dense: Dense  #: continuous output on the step
+    nfev: int  #: rhs calls by this step (lazy dense stages included once made)
+    njev: int = 0  #: Jacobian calls by this step
+
+
+def _rhs(f: Rhs, t: float, y: np.ndarray) -> np.ndarray:
+    """``f(t, y)`` as a float array of the state's shape (else :class:`StepperError`)."""
+    out = np.asarray(f(t, y), dtype=float)
+    if out.shape != y.shape:
+        raise StepperError(
+            f"the right-hand side f(t, y) returned shape {out.shape} for a state of shape {y.shape}"
+        )
+    return out
+
+
+def _check_h(h: float) -> float:
+    h = float(h)
+    if not math.isfinite(h) or h == 0.0:
+        raise StepperError(f"step size h = {h!r}: it must be finite and non-zero")
+    return h
+
+
+def _rms(x: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(x * x))) if x.size else 0.0
+
+
+def _scale(y0: np.ndarray, y1: np.ndarray, rtol: float, atol) -> np.ndarray:
+    """``scale_i = atol_i + rtol max(|y0_i|, |y1_i|)``."""
+    return atol + rtol * np.maximum(np.abs(y0), np.abs(y1))
+
+
+def _finite_or_inf(error: float, *arrays: np.ndarray) -> float:
+    if not math.isfinite(error) or not all(np.all(np.isfinite(a)) for a in arrays):
+        return math.inf
+    return error
+
+
+def check_tolerances(rtol: float, atol, n: int) -> tuple[float, np.ndarray | float]:
+    """Validate ``rtol`` and ``atol`` for a state of size ``n``.
+
+    ``rtol`` must lie in ``[100 eps, 1)`` (below it no float64 method can follow it) and
+    ``atol`` be a non-negative scalar or an array of shape ``(n,)``, not all zero where
+    ``rtol`` is.  Returns them as a float and a float or float array.
+    """
+    try:
+        rtol_ = float(rtol)
+        atol_ = np.asarray(atol, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise StepperError(f"tolerances rtol = {rtol!r}, atol = {atol!r}: not numbers") from exc
+    eps = np.finfo(float).eps
+    if not (100 * eps <= rtol_ < 1):
+        raise StepperError(f"rtol = {rtol_!r}: it must lie in [{100 * eps:.3g}, 1)")
+    if atol_.ndim not in (0, 1) or (atol_.ndim == 1 and atol_.shape != (n,)):
+        raise StepperError(f"atol of shape {atol_.shape}: it must be a scalar or of shape ({n},)")
+    if not np.all(np.isfinite(atol_)) or np.any(atol_ < 0):
+        raise StepperError(f"atol = {atol!r}: it must be finite and non-negative")
+    return rtol_, (float(atol_) if atol_.ndim == 0 else atol_)
+
+
+class Stepper(ABC):
+    """A one-step method; see the module docstring for the contract of :meth:`step`."""
+
+    name: str
+    order: int  #: order of the propagated solution
+    error_order: int  #: the controller's exponent is 1 / (error_order + 1)
+    dense_order: int  #: order of the dense output (local error O(h^(dense_order + 1)))
+    adaptive: bool  #: False: error is 0.0 (fixed step; inf when the step is not finite)
+    implicit: bool  #: True: step() needs jac
+
+    @abstractmethod
+    def step(
+        self,
+        f: Rhs,
+        t0: float,
+        y0: np.ndarray,
+        f0: np.ndarray,
+        h: float,
+        rtol: float,
+        atol: float | np.ndarray,
+        jac: Jac | None = None,
+    ) -> Step:
+        """One step from ``(t0, y0)`` (with ``f0 = f(t0, y0)``) to ``t0 + h``."""
+
+    def __repr__(self) -> str:
+        return f"<stepper {self.name}: order {self.order}>"
+
+
+# --- dense outputs ------------------------------------------------------------------------
+
+
+class _PolyDense:
+    """``y(t0 + theta h) = y0 + sum_k Q_k theta^k`` (``Q = h K^T P``), by Horner's rule."""
+
+    def __init__(self, t0: float, h: float, y0: np.ndarray, Q: np.ndarray):
+        self.t0, self.h, self._y0, self._Q = t0, h, y0, Q
+
+    def __call__(self, theta: float) -> np.ndarray:
+        acc = self._Q[:, -1].copy()
+        for k in range(self._Q.shape[1] - 2, -1, -1):
+            acc = acc * theta + self._Q[:, k]
+        return self._y0 + theta * acc
+
+
+class _HermiteDense:
+    """The cubic Hermite interpolant of ``y0, f0, y1, f1`` (order 3)."""
+
+    def __init__(self, t0, h, y0, y1, f0, f1):
+        self.t0, self.h = t0, h
+        self._y0, self._y1, self._hf0, self._hf1 = y0, y1, h * f0, h * f1
+
+    def __call__(self, theta: float) -> np.ndarray:
+        s = theta
+        h00 = (1 + 2 * s) * (1 - s) ** 2
+        h10 = s * (1 - s) ** 2
+        h01 = s * s * (3 - 2 * s)
+        h11 = s * s * (s - 1)
+        return h00 * self._y0 + h10 * self._hf0 + h01 * self._y1 + h11 * self._hf1
+
+
+class _Dop853Dense:
+    """DOP853's 7th-order dense output (HNW I, section II.10; the routine CONTD8).
+
+    ``y(t0 + theta h) = y0 + theta (F0 + (1 - theta)(F1 + theta (F2 + (1 - theta)(F3 +
+    theta (F4 + (1 - theta)(F5 + theta F6))))))`` with ``F0 = y1 - y0``, ``F1 = h f0 -
+    F0``, ``F2 = 2 F0 - h (f0 + f1)`` and ``F(3+r) = h sum_i d_ri K_i`` over the 16 stages;
+    the three extra stages are evaluated on the first call.
+    """
+
+    def __init__(self, f, t0, h, y0, y1, K, owner: Step | None = None):
+        self.t0, self.h = t0, h
+        self._f, self._y0, self._y1, self._K = f, y0, y1, K
+        self._F: np.ndarray | None = None
+        self.owner = owner
+
+    def _build(self) -> np.ndarray:
+        x = _DOP853_ARRAYS
+        h, y0 = self.h, self._y0
+        s = self._K.shape[0]  # 13: the 12 stages and f(t0 + h, y1)
+        K = np.empty((s + 3, y0.size))
+        K[:s] = self._K
+        for r in range(3):
+            i = s + r
+            K[i] = _rhs(
+                self._f, self.t0 + x["c_extra"][r] * h, y0 + h * (x["a_extra"][r, :i] @ K[:i])
+            )
+        if self.owner is not None:
+            self.owner.nfev += 3
+        dy = self._y1 - y0
+        F = np.empty((7, y0.size))
+        F[0] = dy
+        F[1] = h * K[0] - dy
+        F[2] = 2 * dy - h * (K[0] + K[s - 1])
+        F[3:] = h * (x["d"] @ K)
+        return F
+
+    def __call__(self, theta: float) -> np.ndarray:
+        if self._F is None:
+            self._F = self._build()
+        F, s, s1 = self._F, theta, 1 - theta
+        acc = F[6]
+        for k in range(5, -1, -1):
+            acc = F[k] + (s1 if k % 2 == 0 else s) * acc
+        return self._y0 + s * acc
+
+
+class _RosenbrockDense:
+    """``(1 - theta) y0 + theta (y1 + (1 - theta)(k1 + theta k2))`` (HNW II, VI.(4.8))."""
+
+    def __init__(self, t0, h, y0, y1, k1, k2):
+        self.t0, self.h = t0, h
+        self._y0, self._y1, self._k1, self._k2 = y0, y1, k1, k2
+
+    def __call__(self, theta: float) -> np.ndarray:
+        s1 = 1 - theta
+        return s1 * self._y0 + theta * (self._y1 + s1 * (self._k1 + theta * self._k2))
+
+
+class _NanDense:
+    """Dense output of a failed step (``error = inf``): NaN everywhere."""
+
+    def __init__(self, t0, h, n):
+        self.t0, self.h, self._n = t0, h, n
+
+    def __call__(self, theta: float) -> np.ndarray:
+        return np.full(self._n, np.nan)
+
+
+# --- explicit Runge-Kutta ---------------------------------------------------------------
+
+
+class ExplicitRK(Stepper):
+    """An explicit embedded pair (see :class:`symmech.simulate.tableaux.ExplicitTableau`)."""
+
+    implicit = False
+    adaptive = True
+
+    def __init__(self, tableau: ExplicitTableau):
+        self.tableau = tableau
+        self.name = tableau.name
+        self.order = tableau.order
+        self.error_order = tableau.error_order
+        self.dense_order = tableau.dense_order
+        arrays = tableau.arrays
+        self._c, self._a, self._b = arrays["c"], arrays["a"], arrays["b"]
+        self._e, self._P = arrays["e"], arrays["dense"]
+
+    def _stages(self, f, t0, y0, f0, h) -> tuple[np.ndarray, np.ndarray]:
+        """Stages ``K_0..K_s`` (``K_s = f(t0 + h, y1)``) and ``y1``."""
+        s = self.tableau.stages
+        K = np.empty((s + 1, y0.size))
+        K[0] = f0
+        for i in range(1, s):
+            K[i] = _rhs(f, t0 + self._c[i] * h, y0 + h * (self._a[i, :i] @ K[:i]))
+        y1 = y0 + h * (self._b @ K[:s])
+        K[s] = _rhs(f, t0 + h, y1)
+        return K, y1
+
+    def _error(self, K, h, y0, y1, rtol, atol) -> float:
+        return _rms(h * (self._e @ K) / _scale(y0, y1, rtol, atol))
+
+    def _dense(self, f, t0, h, y0, y1, K) -> Dense:
+        return _PolyDense(t0, h, y0, h * (K.T @ self._P))
+
+    def step(self, f, t0, y0, f0, h, rtol, atol, jac=None) -> Step:
+        h = _check_h(h)
+        y0 = np.asarray(y0, dtype=float)
+        K, y1 = self._stages(f, t0, y0, np.asarray(f0, dtype=float), h)
+        error = self._error(K, h, y0, y1, rtol, atol) if self.adaptive else 0.0
+        error = _finite_or_inf(error, y1, K[-1])
+        step = Step(y1, K[-1], error, None, self.tableau.stages)  # type: ignore[arg-type]
+        step.dense = self._dense(f, t0, h, y0, y1, K)
+        if isinstance(step.dense, _Dop853Dense):
+            step.dense.owner = step
+        return step
+
+
+class Dop853(ExplicitRK):
+    """DOP853: order 8, the combined error estimate and the 7th-order dense output.
+
+    Error norm (HNW I, section II.10, eq. (10.17)): with ``E5 = h sum e_i K_i / scale`` and
+    ``E3 = h sum e3_i K_i / scale``, ``err = |h| ||e5||^2 / sqrt(n (||e5||^2 + 0.01
+    ||e3||^2))`` where ``e5, e3`` are the scaled estimates without ``h`` -- it behaves like
+    ``h^8``, hence ``error_order = 7``.
+    """
+
+    def __init__(self):
+        super().__init__(DOP853)
+        self._e3 = _DOP853_ARRAYS["e3"]
+
+    def _error(self, K, h, y0, y1, rtol, atol) -> float:
+        scale = _scale(y0, y1, rtol, atol)
+        e5 = (self._e @ K) / scale
+        e3 = (self._e3 @ K) / scale
+        n5, n3 = float(e5 @ e5), float(e3 @ e3)
+        if n5 == 0.0 and n3 == 0.0:
+            return 0.0
+        return abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * y0.size)
+
+    def _dense(self, f, t0, h, y0, y1, K) -> Dense:
+        return _Dop853Dense(f, t0, h, y0, y1, K)
+
+
+class ClassicalRK4(ExplicitRK):
+    """The classical fixed-step RK4 with the cubic Hermite dense output (order 3)."""
+
+    adaptive = False
+
+    def __init__(self):
+        super().__init__(RK4)
+
+    def _dense(self, f, t0, h, y0, y1, K) -> Dense:
+        return _HermiteDense(t0, h, y0, y1, K[0], K[-1])
+
+
+_DOP853_ARRAYS = {
+    "e3": np.array(DOP853_EXTRAS.e3, dtype=object).astype(float),
+    "c_extra": np.array(DOP853_EXTRAS.c_extra, dtype=object).astype(float),
+    "a_extra": np.array(DOP853_EXTRAS.a_extra, dtype=object).astype(float),
+    "d": np.array(DOP853_EXTRAS.d, dtype=object).astype(float),
+}
+
+
+# --- Rodas4 -----------------------------------------------------------------------------
+
+
+def _lu_solver(W: np.ndarray) -> Callable[[np.ndarray], np.ndarray] | None:
+    """A solver for ``W x = r`` (LU once: SciPy's ``lu_factor`` if installed, else NumPy),
+    or None when ``W`` is singular or not finite."""
+    if not np.all(np.isfinite(W)):
+        return None
+    try:
+        from scipy.linalg import lu_factor, lu_solve
+    except ImportError:  # the core needs only NumPy
+        try:
+            inv = np.linalg.inv(W)
+        except np.linalg.LinAlgError:
+            return None
+        return lambda r: inv @ r
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            lu = lu_factor(W, check_finite=False)
+        except (np.linalg.LinAlgError, Warning):
+            return None
+    return lambda r: lu_solve(lu, r, check_finite=False)
+
+
+class Rodas4(Stepper):
+    """Rodas4: a 6-stage, L-stable, stiffly accurate Rosenbrock method of order 4(3).
+
+    Each step factors ``W = I/(gamma h) - J`` once (``J = jac(t0, y0)``) and solves six
+    linear systems (see :class:`symmech.simulate.tableaux.RosenbrockTableau`).  ``df/dt``
+    is a forward difference ``(f(t0 + delta, y0) - f0) / delta`` with ``delta =
+    sqrt(eps max(1e-5, |t0|))`` as the code RODAS does (one extra call; zero up to rounding
+    for autonomous problems).  A singular ``W`` gives ``error = inf``.
+    """
+
+    name = "rodas4"
+    implicit = True
+    adaptive = True
+
+    def __init__(self):
+        self.tableau = RODAS4
+        self.order, self.error_order = RODAS4.order, RODAS4.error_order
+        self.dense_order = RODAS4.dense_order
+        self._x = RODAS4.arrays
+
+    def step(self, f, t0, y0, f0, h, rtol, atol, jac=None) -> Step:
+        h = _check_h(h)
+        if jac is None:
+            raise StepperError("rodas4 is implicit: step() needs jac(t, y), the Jacobian df/dy")
+        y0 = np.asarray(y0, dtype=float)
+        f0 = np.asarray(f0, dtype=float)
+        n = y0.size
+        J = np.asarray(jac(t0, y0), dtype=float)
+        if J.shape != (n, n):
+            raise StepperError(f"jac(t, y) returned shape {J.shape} for a state of size {n}")
+        x = self._x
+        delta = math.sqrt(np.finfo(float).eps * max(1e-5, abs(t0)))
+        ft = (_rhs(f, t0 + delta, y0) - f0) / delta
+        nfev = 1
+        solve = _lu_solver(np.eye(n) / (float(x["gamma"]) * h) - J)
+        if solve is None:
+            return Step(
+                np.full(n, np.nan), np.full(n, np.nan), math.inf, _NanDense(t0, h, n), nfev, 1
+            )
+        a, C, c, d = x["a"], x["C"], x["c"], x["d"]
+        U = np.zeros((6, n))
+        for i in range(6):
+            fi = f0 if i == 0 else _rhs(f, t0 + c[i] * h, y0 + a[i, :i] @ U[:i])
+            nfev += i > 0
+            U[i] = solve(fi + (C[i, :i] @ U[:i]) / h + (h * d[i]) * ft)
+        y1 = y0 + x["b"] @ U
+        f1 = _rhs(f, t0 + h, y1)
+        nfev += 1
+        error = _rms(((x["b"] - x["bhat"]) @ U) / _scale(y0, y1, rtol, atol))
+        error = _finite_or_inf(error, y1, f1)
+        dense = _RosenbrockDense(t0, h, y0, y1, x["h"][0] @ U, x["h"][1] @ U)
+        return Step(y1, f1, error, dense, nfev, 1)
+
+
+# --- registry, initial step, controller ------------------------------------------------
+
+_FACTORIES: dict[str, Callable[[], Stepper]] = {
+    "dop853": Dop853,
+    "tsit5": lambda: ExplicitRK(TSIT5),
+    "rk45": lambda: ExplicitRK(RK45),
+    "rk4": ClassicalRK4,
+    "rodas4": Rodas4,
+}
+#: every method name :func:`stepper` accepts
+METHODS: tuple[str, ...] = tuple(_FACTORIES)
+
+
+def stepper(name: str) -> Stepper:
+    """The stepper called ``name`` (one of :data:`METHODS`)."""
+    factory = _FACTORIES.get(name) if isinstance(name, str) else None
+    if factory is None:
+        raise StepperError(
+            f"unknown integration method {name!r}: choose one of {', '.join(METHODS)}"
+        )
+    return factory()
+
+
+def initial_step(
+    f: Rhs, t0: float, y0, f0, direction: float, order: int, rtol: float, atol
+) -> float:
+    """A first step size ``|h|`` by Hairer's algorithm (HNW I, section II.4, p. 169).
+
+    With ``sc_i = atol_i + rtol |y0_i|`` and ``||.||`` the RMS norm scaled by ``sc``:
+    ``d0 = ||y0||``, ``d1 = ||f0||``, ``h0 = 0.01 d0/d1`` (``1e-6`` if either is below
+    ``1e-5``), one explicit Euler step gives ``d2 = ||f(t0 + h0, y0 + h0 f0) - f0|| / h0``,
+    ``h1 = (0.01 / max(d1, d2))^(1/(order+1))`` (``max(1e-6, 1e-3 h0)`` if both are below
+    ``1e-15``) and the result is ``min(100 h0, h1)``.  ``order`` is the error estimator's
+    (:attr:`Stepper.error_order`); the caller clamps the result to its interval and
+    maximum step, as SciPy's ``select_initial_step`` does inside.
+    """
+    y0 = np.asarray(y0, dtype=float)
+    f0 = np.asarray(f0, dtype=float)
+    if y0.size == 0:
+        return math.inf
+    rtol, atol = check_tolerances(rtol, atol, y0.size)
+    if direction not in (1, -1, 1.0, -1.0):
+        raise StepperError(f"direction = {direction!r}: it must be +1 or -1")
+    scale = atol + np.abs(y0) * rtol
+    d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
+    h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    f1 = _rhs(f, t0 + direction * h0, y0 + direction * h0 * f0)
+    d2 = _rms((f1 - f0) / scale) / h0
+    if d1 <= 1e-15 and d2 <= 1e-15:
+        h1 = max(1e-6, h0 * 1e-3)
+    else:
+        h1 = (0.01 / max(d1, d2)) ** (1 / (order + 1))
+    return min(100 * h0, h1)
+
+
+class Controller:
+    """Step-size controller: from a step's error norm, accept or reject and a factor
+    ``h_new = factor h``.
+
+    With ``k = 1/(error_order + 1)``, a step is accepted when ``error <= 1``; then
+    ``factor = safety error^-(k - 0.75 beta) previous^beta`` (Gustafsson's PI control, HNW
+    II, section IV.2, eq. (2.43c), as DOPRI5 uses it; ``beta = 0``, the default, is the
+    standard controller ``safety error^-k`` of HNW I, eq. II.(4.13) and of SciPy), with
+    ``previous = max(error of the last accepted step, 1e-4)``; ``factor = max_factor``
+    when ``error == 0``.  A rejected step gets ``max(min_factor, safety error^-k)`` (NaN
+    counts as ``inf``: ``min_factor``).  Every factor lies in ``[min_factor, max_factor]``
+    and the step after a rejection never grows (``factor <= 1``).  :meth:`reset` forgets the
+    history (after an impact, a restart).
+    """
+
+    def __init__(
+        self,
+        error_order: int,
+        *,
+        safety: float = 0.9,
+        min_factor: float = 0.2,
+        max_factor: float = 10.0,
+        beta: float = 0.0,
+    ):
+        if not (0 < min_factor <= 1 <= max_factor) or not (0 < safety <= 1) or error_order < 1:
+            raise StepperError(
+                f"Controller(error_order={error_order!r}, safety={safety!r}, min_factor="
+                f"{min_factor!r}, max_factor={max_factor!r}): need error_order >= 1, 0 <"
+                " safety <= 1 and 0 < min_factor <= 1 <= max_factor"
+            )
+        if not (0 <= beta < 1 / (error_order + 1) / 0.75):
+            raise StepperError(f"Controller beta = {beta!r}: need 0 <= beta < 4/(3 (q + 1))")
+        self.k = 1.0 / (error_order + 1)
+        self.safety, self.min_factor, self.max_factor, self.beta = (
+            safety,
+            min_factor,
+            max_factor,
+            beta,
+        )
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the previous error and any rejection."""
+        self.previous = 1e-4
+        self.rejected = False
+
+    def __call__(self, error: float) -> tuple[bool, float]:
+        """``(accepted, factor)`` for a step with this error norm."""
+        error = math.inf if math.isnan(error) else float(error)
+        if error <= 1.0:
+            if error == 0.0:
+                factor = self.max_factor
+            else:
+                factor = (
+                    self.safety * error ** (-(self.k - 0.75 * self.beta)) * self.previous**self.beta
+                )
+            factor = min(self.max_factor, max(self.min_factor, factor))
+            if self.rejected:
+                factor = min(1.0, factor)
+            self.previous = max(error, 1e-4)
+            self.rejected = False
+            return True, factor
+        factor = self.min_factor if math.isinf(error) else self.safety * error ** (-self.k)
+        self.rejected = True
+        return False, min(1.0, max(self.min_factor, factor))
+
+
+# --- coefficients for the C port -------------------------------------------------------
+
+
+def _lower(M) -> list[float]:
+    """The strictly lower triangle of a square matrix, row by row."""
+    return [float(M[i][j]) for i in range(1, len(M)) for j in range(i)]
+
+
+def c_tableau(name: str) -> dict[str, list[float]]:
+    """Every coefficient a C implementation of method ``name`` needs, as Python floats.
+
+    Matrices ``a`` (and ``C`` for rodas4) are flattened strictly-lower triangles, row by
+    row (``a[1][0], a[2][0], a[2][1], ...``).  Explicit methods: ``c``, ``a``, ``b`` (the
+    ``s`` stages) and ``e`` (error weights over ``K_0..K_s``, ``K_s = f(t0 + h, y1)``);
+    tsit5 and rk45 add ``dense``, the ``(s + 1) x 4`` matrix ``P`` row by row
+    (``y(t0 + theta h) = y0 + h sum_i K_i sum_k P_ik theta^(k+1)``); dop853 adds ``e3``,
+    ``c_extra`` (3), ``a_extra`` (rows 13..15 over ``K_0..K_(i-1)``, 13 + 14 + 15 entries)
+    and ``d`` (4 x 16, row by row) for :class:`_Dop853Dense`; rk4 has no ``e``.  rodas4:
+    ``gamma`` (one entry), ``c``, ``d``, ``a``, ``C``, ``b``, ``bhat`` and ``h`` (2 x 6).
+    """
+    if name == "rodas4":
+        t = RODAS4
+        return {
+            "gamma": [float(t.gamma)],
+            "c": [float(v) for v in t.c],
+            "d": [float(v) for v in t.d],
+            "a": _lower(t.a),
+            "C": _lower(t.C),
+            "b": [float(v) for v in t.b],
+            "bhat": [float(v) for v in t.bhat],
+            "h": [float(v) for row in t.h for v in row],
+        }
+    tab = {"dop853": DOP853, "tsit5": TSIT5, "rk45": RK45, "rk4": RK4}.get(name)
+    if tab is None:
+        raise StepperError(
+            f"unknown integration method {name!r}: choose one of {', '.join(METHODS)}"
+        )
+    out = {"c": [float(v) for v in tab.c], "a": _lower(tab.a), "b": [float(v) for v in tab.b]}
+    if name != "rk4":
+        out["e"] = [float(v) for v in tab.e]
+    if tab.dense:
+        out["dense"] = [float(v) for row in tab.dense for v in row]
+    if name == "dop853":
+        x = DOP853_EXTRAS
+        out["e3"] = [float(v) for v in x.e3]
+        out["c_extra"] = [float(v) for v in x.c_extra]
+        out["a_extra"] = [float(x.a_extra[r][j]) for r in range(3) for j in range(13 + r)]
+        out["d"] = [float(v) for row in x.d for v in row]
+    return out
