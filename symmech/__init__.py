@@ -36,14 +36,20 @@ from symmech.scenefile import (
 
 __version__ = "0.1.0"
 
-_LAZY = ("codegen",)
+_LAZY = ("codegen", "simulate")
+#: Functions re-exported from the lazily imported sub-packages.
+_LAZY_FUNCTIONS = {"simulate_batch": "simulate"}
 
 
 def __getattr__(name: str) -> object:
-    """``symmech.codegen`` is imported on first use (it loads jinja2 and ctypes)."""
-    if name in _LAZY:
-        import importlib
+    """``symmech.codegen`` and ``symmech.simulate`` are imported on first use (they load
+    jinja2 and ctypes).  The package ``symmech.simulate`` is callable:
+    ``symmech.simulate(scene, q0, v0, t_end, ...)`` is :func:`symmech.simulate.simulate`."""
+    import importlib
 
+    if name in _LAZY_FUNCTIONS:
+        return getattr(importlib.import_module(f"symmech.{_LAZY_FUNCTIONS[name]}"), name)
+    if name in _LAZY:
         return importlib.import_module(f"symmech.{name}")
     raise AttributeError(f"module 'symmech' has no attribute {name!r}")
 

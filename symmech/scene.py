@@ -94,7 +94,7 @@ class Scene:
     [   R/(R**2 + k**2), 0,   k**2/(R**2 + k**2)]])
     """
 
-    __slots__ = ("__derived", "_decl")
+    __slots__ = ("__derived", "__weakref__", "_decl")
 
     def __init__(
         self,

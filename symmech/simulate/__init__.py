@@ -1,0 +1,39 @@
+"""Hybrid simulation of scenes with walls: flow, events, impact maps, resting contact.
+
+``simulate(scene, q0, v0, t_end, ...)`` runs one trajectory (:mod:`.api`); the package
+itself is callable, so ``symmech.simulate(scene, ...)`` is that function;
+``simulate_batch`` runs many in one call of the generated C loop (:mod:`.batch`).  The
+loop itself is described in :mod:`.hybrid`, event location in :mod:`.events`, the
+integrators in :mod:`.steppers` and :mod:`.flow`, the compiled functions (free flight and
+contact modes) in :mod:`.system`.
+"""
+
+import sys
+import types
+
+from symmech.simulate.api import CONTACT_MODES, simulate, system_for
+from symmech.simulate.result import Event, SimulationResult
+from symmech.simulate.system import BACKENDS, HybridSystem, SimulationError, contact_scene
+
+__all__ = [
+    "BACKENDS",
+    "CONTACT_MODES",
+    "Event",
+    "HybridSystem",
+    "SimulationError",
+    "SimulationResult",
+    "contact_scene",
+    "simulate",
+    "system_for",
+]
+
+
+class _CallablePackage(types.ModuleType):
+    """``symmech.simulate(...)`` calls :func:`simulate` (the package and the function share
+    the name the API promises)."""
+
+    def __call__(self, *args: object, **kwargs: object) -> SimulationResult:
+        return simulate(*args, **kwargs)  # type: ignore[arg-type]
+
+
+sys.modules[__name__].__class__ = _CallablePackage

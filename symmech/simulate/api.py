@@ -1,0 +1,203 @@
+"""``simulate``: run a scene with walls as a hybrid system.
+
+>>> import symmech as sm
+>>> from symmech.examples import bouncing_ball
+>>> res = sm.simulate(bouncing_ball(), [1.0], [0.0], 2.0, params={"m": 1, "g": 9.81, "alpha": 0.5},
+...                   backend="numpy", contact="stop")
+>>> res.status, round(res.accumulation_time, 6)   # sqrt(2/9.81) (1 + 1/2)/(1 - 1/2)
+('zeno', 1.354571)
+
+Every input is checked before anything runs (:class:`SimulationError` names the argument):
+the state's shape and finiteness, ``psi >= 0`` at every wall (a state on the wrong side is
+refused), ``v0`` in the constraint distribution D (a residual ``|mu v0|`` within
+``100 (atol + rtol |v0|)`` is projected away with P, a larger one is refused),
+``t_end > t0``, tolerances (``0 < rtol < 1``, ``atol > 0``), the parameters (all given,
+finite, with their declared signs, restitutions in [0, 1]) and the options.
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from symmech.scene import Scene
+from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
+from symmech.simulate.hybrid import Options, run
+from symmech.simulate.result import SimulationResult
+from symmech.simulate.system import (
+    BACKENDS,
+    Functions,
+    HybridSystem,
+    SimulationError,
+    check_parameters,
+)
+
+__all__ = ["CONTACT_MODES", "simulate", "system_for"]
+
+#: What to do at an accumulation of impacts.
+CONTACT_MODES = ("persistent", "stop")
+
+_SYSTEMS: dict[tuple, tuple[weakref.ref, HybridSystem]] = {}
+
+
+def system_for(
+    scene: Scene, target: str, strategy: str = "auto", definitions: Mapping | None = None
+) -> HybridSystem:
+    """The :class:`HybridSystem` of ``scene`` for ``target``, built once and cached while
+    the scene lives."""
+    defs = tuple(sorted((str(k), str(v)) for k, v in (definitions or {}).items()))
+    key = (id(scene), target, strategy, defs)
+    hit = _SYSTEMS.get(key)
+    if hit is not None and hit[0]() is scene:
+        return hit[1]
+    system = HybridSystem.build(scene, target, strategy=strategy, definitions=definitions)
+    _SYSTEMS[key] = (weakref.ref(scene), system)
+    return system
+
+
+def _vector(value: object, n: int, what: str) -> np.ndarray:
+    try:
+        a = np.asarray(value)
+    except Exception as exc:
+        raise SimulationError(f"{what}: cannot be read as an array ({exc})") from exc
+    if a.dtype.kind == "c":
+        raise SimulationError(f"{what}: complex values are not a mechanical state")
+    if a.dtype.kind not in "biuf":
+        raise SimulationError(f"{what}: expected real numbers, got dtype {a.dtype}")
+    a = a.astype(np.float64)
+    if a.shape != (n,):
+        raise SimulationError(f"{what}: expected shape ({n},), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
+    return a
+
+
+def _positive(value: object, what: str) -> float:
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise SimulationError(f"{what}: expected a positive number, got {value!r}") from exc
+    if not (math.isfinite(x) and x > 0):
+        raise SimulationError(f"{what}: expected a finite positive number, got {value!r}")
+    return x
+
+
+def simulate(
+    scene: Scene,
+    q0: Any,
+    v0: Any,
+    t_end: float,
+    *,
+    params: Mapping[str, float] | Any = None,
+    t0: float = 0.0,
+    backend: str = "c",
+    method: str = "dop853",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    max_step: float | None = None,
+    max_events: int = 100_000,
+    contact: str = "persistent",
+    strategy: str = "auto",
+    definitions: Mapping | None = None,
+    event_samples: int = 8,
+) -> SimulationResult:
+    """Simulate ``scene`` from ``(q0, v0)`` at ``t0`` to ``t_end`` (see the module and
+    :mod:`symmech.simulate.hybrid` docstrings).
+
+    ``backend``: ``"c"`` (the whole loop in generated C), ``"numpy"`` (the loop in Python
+    over the generated NumPy module: the reference of the C loop) or ``"scipy"`` (SciPy's
+    ``OdeSolver`` classes over the generated C rhs, symmech's events and impacts around
+    them).  ``method``: ``"dop853"``, ``"tsit5"``, ``"rk45"``, ``"rk4"`` (fixed step
+    ``max_step``) or ``"rodas4"`` (linearly implicit, for stiff scenes); with
+    ``backend="scipy"`` SciPy's names (``"DOP853"``, ``"RK45"``, ``"Radau"``, ``"BDF"``,
+    ``"LSODA"``).  ``contact``: ``"persistent"`` (an accumulation of impacts becomes a
+    resting contact, released when the contact force would turn negative) or ``"stop"``
+    (the run ends with status ``"zeno"`` at the estimated accumulation time).
+    """
+    if not isinstance(scene, Scene):
+        raise SimulationError(f"scene: expected a symmech.Scene, got {type(scene).__name__}")
+    if backend not in BACKENDS:
+        raise SimulationError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if contact not in CONTACT_MODES:
+        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
+    n = scene.n
+    q = _vector(q0, n, "q0")
+    v = _vector(v0, n, "v0")
+    t0f = float(t0)
+    tend = float(t_end)
+    if not (math.isfinite(t0f) and math.isfinite(tend)):
+        raise SimulationError(f"t0 and t_end must be finite, got {t0!r}, {t_end!r}")
+    if not tend > t0f:
+        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
+    rtol_f = _positive(rtol, "rtol")
+    if not rtol_f < 1:
+        raise SimulationError(f"rtol must be below 1, got {rtol!r}")
+    if rtol_f < 100 * np.finfo(float).eps:
+        raise SimulationError(
+            f"rtol = {rtol!r} is below 100 eps = {100 * np.finfo(float).eps:.3g}: float64"
+            " cannot deliver it (use the mpmath reference for more digits)"
+        )
+    atol_f = _positive(atol, "atol")
+    span = tend - t0f
+    step_cap = span if max_step is None else _positive(max_step, "max_step")
+    if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
+        raise SimulationError(f"max_events must be a positive integer, got {max_events!r}")
+    if isinstance(event_samples, bool) or not isinstance(event_samples, int) or event_samples < 1:
+        raise SimulationError(f"event_samples must be a positive integer, got {event_samples!r}")
+    values = check_parameters(scene, params)
+
+    target = "numpy" if backend == "numpy" else "c"
+    system = system_for(scene, target, strategy, definitions)
+    fns = Functions(system, values)
+    y0 = np.concatenate([q, v])
+    for w in range(fns.walls):
+        psi = fns.psi(w, t0f, q)
+        if psi < -10 * atol_f:
+            raise SimulationError(
+                f"q0 is on the wrong side of wall {fns.wall_names[w]!r}: psi = {psi!r} < 0"
+            )
+    if fns.constrained:
+        res = fns.residual(None, t0f, q, v)
+        allowed = 100 * (atol_f + rtol_f * float(np.max(np.abs(v), initial=0.0)))
+        if res > allowed:
+            raise SimulationError(
+                f"v0 is not in the constraint distribution D: |mu v0| = {res:.3g} >"
+                f" {allowed:.3g}; give a velocity that satisfies the constraints"
+            )
+        y0[n:] = fns.project(None, t0f, q, v)
+
+    opts = Options(
+        t_end=tend,
+        rtol=rtol_f,
+        atol=atol_f,
+        max_events=max_events,
+        contact=contact,
+        samples=event_samples,
+    )
+    if backend == "c":
+        from symmech.simulate.csim import run_c
+
+        return run_c(system, values, y0, t0f, opts, method=method, max_step=step_cap)
+    make: Any
+    if backend == "scipy":
+
+        def make(f: Any) -> Any:
+            return ScipyFlow(f, method, rtol_f, atol_f, step_cap)
+    else:
+        fixed = None
+        if method == "rk4":
+            fixed = step_cap if max_step is not None else span / 1000
+
+        def make(f: Any) -> Any:
+            return RKFlow(f, method, rtol_f, atol_f, step_cap, fixed_step=fixed)
+
+    flow = (
+        AugmentedFlow(make, fns.flow_rhs, fns.flow_rates, fns.gaps, 2 * n)
+        if fns.walls
+        else make(fns.flow_rhs)
+    )
+    return run(fns, flow, t0f, y0, opts)

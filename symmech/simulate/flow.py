@@ -1,0 +1,273 @@
+"""The smooth phases of a hybrid run: adaptive integration between events.
+
+A flow integrates ``y_dot = f(t, y)`` one accepted step at a time and hands each step to
+the hybrid loop as a :class:`Segment` with its continuous output, so that the loop can look
+for events *inside* the step before accepting it.  After an event the loop restarts the
+flow from the new state (``start``), keeping the last accepted step size as a hint.
+
+* :class:`RKFlow` drives symmech's own steppers (:mod:`symmech.simulate.steppers`: DOP853,
+  Tsitouras 5(4), Dormand-Prince 5(4), RK4 and the linearly implicit Rodas4) with the
+  standard step-size rule (Hairer, Norsett & Wanner, Solving ODEs I, II.4):
+  ``h_new = h * min(10, max(0.2, 0.9 err^(-1/(k+1))))`` with k the order of the error
+  estimate, no growth right after a rejection, and the initial step of HNW I, II.4.
+* :class:`ScipyFlow` drives SciPy's ``OdeSolver`` classes (``DOP853``, ``RK45``,
+  ``Radau``, ``BDF``, ``LSODA``) step by step with their own dense output.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+__all__ = ["AugmentedFlow", "FlowFailure", "RKFlow", "ScipyFlow", "Segment"]
+
+Rhs = Callable[[float, np.ndarray], np.ndarray]
+
+
+class FlowFailure(RuntimeError):
+    """The integrator cannot continue (step size underflow, non-finite state)."""
+
+
+@dataclass
+class Segment:
+    """One accepted step from ``t0`` to ``t1``: end states, the derivative at ``t1``, and
+    ``dense(t)`` for t in [t0, t1]."""
+
+    t0: float
+    t1: float
+    y0: np.ndarray
+    y1: np.ndarray
+    f1: np.ndarray | None
+    dense: Callable[[float], np.ndarray]
+
+
+@dataclass
+class FlowStats:
+    steps: int = 0
+    rejected: int = 0
+    nfev: int = 0
+    njev: int = 0
+
+
+class RKFlow:
+    """Adaptive (or fixed-step, for rk4) integration with a :mod:`steppers` method."""
+
+    def __init__(
+        self,
+        f: Rhs,
+        method: str,
+        rtol: float,
+        atol: float,
+        max_step: float,
+        jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
+        fixed_step: float | None = None,
+    ):
+        from symmech.simulate.steppers import initial_step, stepper
+
+        self._initial_step = initial_step
+        self.stepper = stepper(method)
+        self.f, self.jac = f, jac
+        self.rtol, self.atol, self.max_step = rtol, atol, max_step
+        self.fixed_step = fixed_step
+        self.stats = FlowStats()
+        self.h: float | None = None
+        self._rejected_last = False
+
+    def _rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        self.stats.nfev += 1
+        return self.f(t, y)
+
+    def _jac(self, t: float, y: np.ndarray) -> np.ndarray:
+        self.stats.njev += 1
+        assert self.jac is not None
+        return self.jac(t, y)
+
+    def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
+        """(Re)start at (t, y), integrating towards ``t_bound``."""
+        self.t, self.y, self.t_bound = t, np.array(y, dtype=float), t_bound
+        self.fy = self._rhs(t, self.y)
+        if not np.all(np.isfinite(self.fy)):
+            raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
+        if self.fixed_step is not None:
+            self.h = self.fixed_step
+        elif self.h is None:
+            self.h = self._initial_step(
+                self._rhs,
+                t,
+                self.y,
+                self.fy,
+                1.0,
+                self.stepper.error_order,
+                self.rtol,
+                self.atol,
+            )
+        self.h = min(self.h, self.max_step)
+        self._rejected_last = False
+
+    def advance(self) -> Segment:
+        """Take one accepted step (rejecting and retrying as the error estimate asks)."""
+        t, y = self.t, self.y
+        left = self.t_bound - t
+        if left <= 0:
+            raise FlowFailure("advance past t_bound")
+        eps = np.finfo(float).eps
+        while True:
+            assert self.h is not None
+            h = min(self.h, self.max_step, left)
+            if left - h < 4 * eps * abs(self.t_bound):  # do not leave a sliver
+                h = left
+            if h <= 8 * eps * max(abs(t), 1.0):
+                raise FlowFailure(f"step size {h:.3g} too small at t = {t!r}")
+            jac = self._jac if self.stepper.implicit else None
+            st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
+            err = st.error
+            finite = np.all(np.isfinite(st.y)) and np.isfinite(err)
+            if not self.stepper.adaptive:
+                if not finite:
+                    raise FlowFailure(f"non-finite state after a fixed step at t = {t!r}")
+                break
+            if finite and err <= 1.0:
+                k = self.stepper.error_order
+                factor = 10.0 if err == 0 else min(10.0, max(0.2, 0.9 * err ** (-1 / (k + 1))))
+                if self._rejected_last:
+                    factor = min(factor, 1.0)
+                self._rejected_last = False
+                self.h = h * factor
+                break
+            self.stats.rejected += 1
+            self._rejected_last = True
+            if not finite:
+                self.h = 0.25 * h
+            else:
+                k = self.stepper.error_order
+                self.h = h * max(0.2, 0.9 * err ** (-1 / (k + 1)))
+        self.stats.steps += 1
+        t1 = self.t_bound if h == left else t + h
+        dense_step = st.dense
+
+        def dense(tt: float, _d: Any = dense_step, _t0: float = t, _h: float = h) -> np.ndarray:
+            return _d((tt - _t0) / _h)
+
+        seg = Segment(t, t1, y, st.y, st.f, dense)
+        self.t, self.y, self.fy = t1, st.y, st.f
+        return seg
+
+    def accept_projection(self, y: np.ndarray) -> None:
+        """The loop replaced the step's end state (constraint projection): recompute f."""
+        self.y = np.array(y, dtype=float)
+        self.fy = self._rhs(self.t, self.y)
+
+
+class ScipyFlow:
+    """Integration with one of SciPy's ``OdeSolver`` classes, one step at a time."""
+
+    METHODS = ("DOP853", "RK45", "RK23", "Radau", "BDF", "LSODA")
+
+    def __init__(
+        self,
+        f: Rhs,
+        method: str,
+        rtol: float,
+        atol: float,
+        max_step: float,
+        jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
+    ):
+        from scipy import integrate
+
+        name = {m.lower(): m for m in self.METHODS}.get(method.lower())
+        if name is None:
+            raise ValueError(f"scipy method must be one of {self.METHODS}, got {method!r}")
+        self.cls = getattr(integrate, name)
+        self.implicit = name in ("Radau", "BDF", "LSODA")
+        self.f, self.jac = f, jac
+        self.rtol, self.atol, self.max_step = rtol, atol, max_step
+        self.stats = FlowStats()
+        self.h: float | None = None
+        self.solver: Any = None
+
+    def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
+        kwargs: dict[str, Any] = {"rtol": self.rtol, "atol": self.atol, "max_step": self.max_step}
+        if self.h is not None:
+            kwargs["first_step"] = min(self.h, t_bound - t)
+        if self.implicit and self.jac is not None:
+            kwargs["jac"] = self.jac
+        if self.solver is not None:
+            self._collect()
+        self.solver = self.cls(self.f, t, np.array(y, dtype=float), t_bound, **kwargs)
+        self.t_bound = t_bound
+
+    def _collect(self) -> None:
+        s = self.solver
+        self.stats.nfev += s.nfev
+        self.stats.njev += getattr(s, "njev", 0)
+        s.nfev = 0
+        if hasattr(s, "njev"):
+            s.njev = 0
+
+    def advance(self) -> Segment:
+        s = self.solver
+        t0, y0 = float(s.t), s.y.copy()
+        message = s.step()
+        if s.status == "failed":
+            raise FlowFailure(f"scipy {self.cls.__name__}: {message}")
+        self.stats.steps += 1
+        self._collect()
+        self.h = s.step_size if s.step_size else self.h
+        dense = s.dense_output()
+        return Segment(t0, float(s.t), y0, s.y.copy(), None, lambda tt, _d=dense: _d(tt))
+
+    def accept_projection(self, y: np.ndarray) -> None:
+        """The loop replaced the end state: restart the solver there."""
+        if self.solver.t < self.t_bound:
+            self.start(float(self.solver.t), y, self.t_bound)
+
+
+class AugmentedFlow:
+    """A flow whose state carries the walls' gaps: ``y_aug = (y, z)`` with
+    ``z_w' = d psi_w/dt = dpsi_w q_dot + psi_t``.  The integrator's error control then
+    resolves every gap's variation as well as the motion, so a step never spans a wall's
+    oscillation (a spinning body, a fast moving wall) that a few samples would miss.  The
+    loop sees only ``y``; ``z`` is reset to the exact gaps at every (re)start."""
+
+    def __init__(
+        self,
+        make: Callable[[Rhs], Any],
+        rhs: Rhs,
+        rates: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
+        gaps: Callable[[float, np.ndarray], np.ndarray],
+        size: int,
+    ):
+        self.size, self._rhs, self._rates, self._gaps = size, rhs, rates, gaps
+        self.inner = make(self._augmented)
+
+    @property
+    def stats(self) -> Any:
+        return self.inner.stats
+
+    def _augmented(self, t: float, ya: np.ndarray) -> np.ndarray:
+        y = ya[: self.size]
+        ydot = self._rhs(t, y)
+        return np.concatenate([ydot, self._rates(t, y, ydot)])
+
+    def _lift(self, t: float, y: np.ndarray) -> np.ndarray:
+        return np.concatenate([y, self._gaps(t, y)])
+
+    def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
+        self.inner.start(t, self._lift(t, y), t_bound)
+
+    def advance(self) -> Segment:
+        seg = self.inner.advance()
+        k = self.size
+
+        def dense(tt: float, _d: Any = seg.dense) -> np.ndarray:
+            return _d(tt)[:k]
+
+        f1 = None if seg.f1 is None else seg.f1[:k]
+        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense)
+
+    def accept_projection(self, y: np.ndarray) -> None:
+        t = self.inner.t if hasattr(self.inner, "t") else float(self.inner.solver.t)
+        self.inner.accept_projection(self._lift(t, y))

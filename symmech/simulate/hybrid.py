@@ -1,0 +1,472 @@
+"""The hybrid loop: flow, events, impact maps, accumulation and resting contact.
+
+One run alternates smooth phases and events.  Each accepted step of the flow
+(:mod:`symmech.simulate.flow`) is searched for events before it is accepted
+(:mod:`symmech.simulate.events`): a wall's gap psi turning negative, or, while in contact,
+the normal contact force lambda_N turning negative.  The step is cut at the earliest event
+(located on the continuous output, reported on the admissible side) and the loop restarts
+the flow from the state the event produces.
+
+**At a wall** (psi = 0), with the normal rate ``r = d psi/dt = dpsi q_dot + psi_t`` and the
+velocity tolerance ``tol_v = atol + rtol |v|_inf``:
+
+* ``r < -tol_v``: an **impact**.  The scene's impact map gives v+ (Carnot paper eqs. 10,
+  17, 20; text 001 Theorem 2.12).  Walls reached at the same instant (``psi <= tol_psi``,
+  ``tol_psi = 10 atol``) that still approach after it are resolved one at a time, the one
+  with the most negative normal rate first (ties: the lowest index), until none approaches:
+  the sequential rule, deterministic, and for a row of equal elastic balls (Newton's
+  cradle) the velocity passes down the row.
+* ``|r| <= tol_v``: the wall is reached tangentially, a **grazing** contact: reported, no
+  impact map.  If the wall would have to push to stay out of it (lambda_N > 0 in its
+  contact mode) the body stays on it: **contact**.
+* **Accumulation (Zeno)**: after an impact whose rebound rate is below ``zeno_factor tol_v``
+  while the wall would have to push (lambda_N > 0), the impacts accumulate.  The
+  accumulation time is estimated from the geometric decay of the last flight times,
+  ``t* = t_k + dt_k rho / (1 - rho)`` with ``rho = dt_k / dt_(k-1)`` (exact for the bouncing
+  ball).  With ``contact="stop"`` the run ends there with status ``"zeno"``; with
+  ``contact="persistent"`` the velocity is projected onto the contact distribution (a
+  perfectly plastic impact: Carnot paper eq. 10 with alpha = 0, and for a rough wall the
+  rolling constraint kept) and the wall becomes an active holonomic constraint (see
+  :func:`symmech.simulate.system.contact_scene`) until lambda_N would turn negative
+  (**release**).  A moving wall has no contact mode: its accumulation stops the run.
+
+**Drift.**  After each accepted step of a constrained flow the velocity is projected with
+the mode's P(q) (Carnot paper section 2.2) and, in contact, the position is moved back onto
+psi = 0 along the gradient (one Newton step); the largest residual before projection is
+``stats["constraint_drift"]``.  Where the flow conserves energy (potential independent of
+t), ``stats["energy_drift"]`` is the largest ``|E(t) - E(0) - sum of the events' dE|``.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from symmech.simulate.events import find_root
+from symmech.simulate.flow import FlowFailure, Segment
+from symmech.simulate.result import Event, SimulationResult
+
+__all__ = ["Options", "run"]
+
+EPS = float(np.finfo(float).eps)
+
+
+@dataclass(frozen=True)
+class Options:
+    """Options of one run (validated by :func:`symmech.simulate.simulate`)."""
+
+    t_end: float
+    rtol: float
+    atol: float
+    max_events: int = 100_000
+    contact: str = "persistent"
+    samples: int = 8
+    zeno_factor: float = 100.0
+
+
+class Flow(Protocol):
+    stats: Any
+
+    def start(self, t: float, y: np.ndarray, t_bound: float) -> None: ...
+    def advance(self) -> Segment: ...
+    def accept_projection(self, y: np.ndarray) -> None: ...
+
+
+class _Stop(Exception):
+    def __init__(self, status: str, message: str, accumulation: float | None = None):
+        super().__init__(message)
+        self.status, self.message, self.accumulation = status, message, accumulation
+
+
+class _Run:
+    """The state of one run (see the module docstring)."""
+
+    def __init__(self, fns: Any, flow: Flow, t0: float, y0: np.ndarray, opts: Options):
+        self.f, self.flow, self.o = fns, flow, opts
+        self.mode = None
+        self.n = fns.n
+        self.walls = fns.walls
+        self.names = fns.wall_names
+        self.t = t0
+        self.y = np.array(y0, dtype=float)
+        self.ts: list[float] = [t0]
+        self.ys: list[np.ndarray] = [self.y.copy()]
+        self.segments: list[tuple[float, float, Any]] = []
+        self.events: list[Event] = []
+        self.history: dict[int, list[float]] = {w: [] for w in range(self.walls)}
+        self.energy0 = fns.energy(t0, self.y[: self.n], self.y[self.n :])
+        self.energy_jumps = 0.0
+        self.energy_drift = 0.0
+        self.drift = 0.0
+        self.tol_psi = 10 * opts.atol
+
+    @property
+    def mode(self) -> int | None:
+        """The wall in contact (None: free flight); the flow integrates this mode."""
+        return self.f.mode
+
+    @mode.setter
+    def mode(self, wall: int | None) -> None:
+        self.f.mode = wall
+
+    # -- helpers ----------------------------------------------------------------------------
+    def q(self, y: np.ndarray) -> np.ndarray:
+        return y[: self.n]
+
+    def v(self, y: np.ndarray) -> np.ndarray:
+        return y[self.n :]
+
+    def tol_v(self, y: np.ndarray) -> float:
+        return self.o.atol + self.o.rtol * float(np.max(np.abs(self.v(y)), initial=0.0))
+
+    def record(self, t: float, y: np.ndarray) -> None:
+        self.ts.append(t)
+        self.ys.append(np.array(y, dtype=float))
+
+    def event(self, kind: str, wall: int, y_minus: np.ndarray, y_plus: np.ndarray, rate: float):
+        q = self.q(y_minus)
+        e0 = self.f.energy(self.t, q, self.v(y_minus))
+        e1 = self.f.energy(self.t, self.q(y_plus), self.v(y_plus))
+        self.energy_jumps += e1 - e0
+        self.events.append(
+            Event(
+                time=self.t,
+                wall=wall,
+                wall_name=self.names[wall],
+                kind=kind,
+                q=q.copy(),
+                v_minus=self.v(y_minus).copy(),
+                v_plus=self.v(y_plus).copy(),
+                energy_change=e1 - e0,
+                normal_speed=rate,
+            )
+        )
+        if len(self.events) >= self.o.max_events:
+            raise _Stop("max_events", f"stopped after {len(self.events)} events at t = {self.t!r}")
+
+    def needs_push(self, wall: int, y: np.ndarray) -> bool:
+        """Whether the wall would have to push to keep the body out of it (lambda_N > 0 of
+        the contact mode at the state with its normal velocity removed)."""
+        if self.f.moving[wall]:
+            # no contact mode: the body presses on the wall if its free acceleration does
+            # not lead away (second derivative of psi along the flow at r = 0)
+            return self._free_psi_acceleration(wall, y) < 0
+        q = self.q(y)
+        v = self.f.project(wall, self.t, q, self.v(y))
+        return self.f.normal_force(wall, self.t, q, v) > 0
+
+    def _free_psi_acceleration(self, wall: int, y: np.ndarray) -> float:
+        h = 1e-6 * max(1.0, abs(self.t))
+        ydot = self.f.rhs(None, self.t, y)
+        r0 = self.f.rate(wall, self.t, y, ydot)
+        y1 = y + h * ydot
+        r1 = self.f.rate(wall, self.t + h, y1, self.f.rhs(None, self.t + h, y1))
+        return (r1 - r0) / h
+
+    # -- events -----------------------------------------------------------------------------
+    def detect(self, seg: Segment) -> tuple[float, np.ndarray, int, str] | None:
+        """The earliest event inside ``seg``: (time, state, wall, "wall" | "release")."""
+        funcs: list[tuple[int, str]] = []
+        for w in range(self.walls):
+            if w != self.mode:
+                funcs.append((w, "wall"))
+        if self.mode is not None:
+            funcs.append((self.mode, "release"))
+        if not funcs:
+            return None
+
+        t0 = seg.t0
+        # a wall touched at the start of the step (just left, or released): psi(t0) ~ 0 is
+        # a root of psi itself, so search the divided gap psi(t)/(t - t0) instead, whose
+        # value at t0 is the normal rate d psi/dt (positive when leaving)
+        divided = [
+            what == "wall" and abs(self.f.psi(w, t0, self.q(seg.y0))) <= self.tol_psi
+            for w, what in funcs
+        ]
+
+        def value(i: int, t: float, y: np.ndarray) -> float:
+            w, what = funcs[i]
+            if what == "release":
+                return self.f.normal_force(w, t, self.q(y), self.v(y))
+            psi = self.f.psi(w, t, self.q(y))
+            return psi / (t - t0) if divided[i] else psi
+
+        def start_value(i: int) -> float:
+            if divided[i]:
+                return self.f.normal_rate(funcs[i][0], t0, seg.y0)
+            return value(i, t0, seg.y0)
+
+        def crossed(i: int, a: float, b: float) -> bool:
+            return (a > 0 >= b) if funcs[i][1] == "release" else (a >= 0 > b)
+
+        def state(t: float) -> np.ndarray:
+            return seg.y0 if t == t0 else seg.y1 if t == seg.t1 else seg.dense(t)
+
+        K = self.o.samples
+        times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
+        vals = [[start_value(i) for i in range(len(funcs))]]
+        for k in range(1, len(times)):
+            tk = times[k]
+            vals.append([value(i, tk, state(tk)) for i in range(len(funcs))])
+            brackets: list[tuple[int, float, float, float, float]] = []
+            for i in range(len(funcs)):
+                a, b = vals[k - 1][i], vals[k][i]
+                if crossed(i, a, b):
+                    brackets.append((i, times[k - 1], tk, a, b))
+                elif k >= 2 and funcs[i][1] == "wall":
+                    dip = self._dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
+                    if dip is not None:
+                        tv = dip
+                        gv = value(i, tv, state(tv))
+                        if gv < 0:
+                            lo = times[k - 2] if tv < times[k - 1] else times[k - 1]
+                            glo = vals[k - 2][i] if tv < times[k - 1] else vals[k - 1][i]
+                            brackets.append((i, lo, tv, glo, gv))
+            if brackets:
+                best: tuple[float, np.ndarray, int, str] | None = None
+                for i, lo, hi, glo, ghi in brackets:
+
+                    def g(t: float, i: int = i) -> float:
+                        return value(i, t, seg.dense(t))
+
+                    if ghi == 0:  # a contact force reaching exactly zero at the sample
+                        a = hi
+                    else:
+                        a = find_root(g, lo, hi, glo, ghi, EPS)[0]
+                    if best is None or a < best[0]:
+                        best = (a, state(a), *funcs[i])
+                return best
+        return None
+
+    @staticmethod
+    def _dip(ts: list[float], gs: list[float]) -> float | None:
+        """The vertex of the parabola through three non-negative samples of a gap, when it
+        lies inside their span and below zero (a dip between samples), else None."""
+        (t0, t1, t2), (g0, g1, g2) = ts, gs
+        if min(g0, g1, g2) < 0 or g1 > min(g0, g2):
+            return None
+        d01 = (g1 - g0) / (t1 - t0)
+        d12 = (g2 - g1) / (t2 - t1)
+        curv = (d12 - d01) / (t2 - t0)
+        if curv <= 0:
+            return None
+        tv = 0.5 * (t0 + t1) - d01 / (2 * curv)
+        if not t0 < tv < t2:
+            return None
+        gv = g1 + d01 * (tv - t1) + curv * (tv - t0) * (tv - t1)
+        return tv if gv < 0 else None
+
+    def at_wall(self, wall: int) -> None:
+        """Resolve the contact with ``wall`` reached at (self.t, self.y)."""
+        y = self.y
+        rate = self.f.normal_rate(wall, self.t, y)
+        tol_v = self.tol_v(y)
+        if rate >= -tol_v:
+            if self.needs_push(wall, y):
+                self.enter_contact(wall, rate, reason="grazing contact with the wall pressing")
+            else:
+                self.event("grazing", wall, y, y, rate)
+            return
+        self.impacts(wall, rate)
+
+    def impacts(self, first: int, rate: float) -> None:
+        """Impact at ``first``, then the sequential rule for walls reached at once."""
+        hit: list[int] = []
+        wall, r = first, rate
+        for _ in range(100 * max(self.walls, 1)):
+            y = self.y
+            q, v = self.q(y), self.v(y)
+            v_plus = self.f.impact(wall, self.t, q, v)
+            y_plus = np.concatenate([q, v_plus])
+            if self.mode is not None:  # keep the active contact
+                y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
+            self.event("impact", wall, y, y_plus, r)
+            self.y = y_plus
+            self.history[wall].append(self.t)
+            hit.append(wall)
+            nxt = self.approaching()
+            if nxt is None:
+                break
+            wall, r = nxt
+        else:
+            raise _Stop(
+                "failed",
+                f"simultaneous impacts at t = {self.t!r} did not resolve in"
+                f" {100 * self.walls} applications of the sequential rule",
+            )
+        for w in dict.fromkeys(hit):
+            self.check_accumulation(w)
+
+    def approaching(self) -> tuple[int, float] | None:
+        """The wall at contact (psi <= tol_psi) with the most negative normal rate below
+        -tol_v, or None."""
+        y = self.y
+        tol_v = self.tol_v(y)
+        best: tuple[int, float] | None = None
+        for w in range(self.walls):
+            if w == self.mode or self.f.psi(w, self.t, self.q(y)) > self.tol_psi:
+                continue
+            r = self.f.normal_rate(w, self.t, y)
+            if r < -tol_v and (best is None or r < best[1]):
+                best = (w, r)
+        return best
+
+    def check_accumulation(self, wall: int) -> None:
+        y = self.y
+        rebound = self.f.normal_rate(wall, self.t, y)
+        if rebound > self.o.zeno_factor * self.tol_v(y) or not self.needs_push(wall, y):
+            return
+        times = self.history[wall]
+        estimate = self.t
+        if len(times) >= 3:
+            d1, d0 = times[-1] - times[-2], times[-2] - times[-3]
+            if d0 > 0 and 0 < d1 < d0:
+                rho = d1 / d0
+                estimate = self.t + d1 * rho / (1 - rho)
+        if self.o.contact == "stop" or self.f.moving[wall] or self.mode is not None:
+            why = (
+                "contact=stop"
+                if self.o.contact == "stop"
+                else "the wall moves (no contact mode for a moving wall)"
+                if self.f.moving[wall]
+                else f"already in contact with {self.names[self.mode]!r}"  # type: ignore[index]
+            )
+            raise _Stop(
+                "zeno",
+                f"impacts on wall {self.names[wall]!r} accumulate at t* = {estimate!r}"
+                f" (last impact at t = {self.t!r}, rebound speed {rebound:.3g}); stopped: {why}",
+                estimate,
+            )
+        self.enter_contact(wall, rebound, reason=f"accumulation of impacts (t* ~ {estimate!r})")
+
+    def enter_contact(self, wall: int, rate: float, reason: str) -> None:
+        if self.f.moving[wall] or self.o.contact == "stop" or self.mode is not None:
+            raise _Stop(
+                "zeno",
+                f"the body comes to rest on wall {self.names[wall]!r} at t = {self.t!r}"
+                f" ({reason}); stopped: "
+                + (
+                    "contact=stop"
+                    if self.o.contact == "stop"
+                    else "the wall moves"
+                    if self.f.moving[wall]
+                    else "contact with two walls at once is not supported"
+                ),
+                self.t,
+            )
+        y = self.y.copy()
+        y_plus = self.stabilise(wall, y, drift=False)
+        self.event("contact", wall, y, y_plus, rate)
+        self.y = y_plus
+        self.mode = wall
+
+    def stabilise(self, mode: int | None, y: np.ndarray, drift: bool = True) -> np.ndarray:
+        """Project onto the mode's constraints: psi = 0 (contact) and P(q) v; with
+        ``drift``, the residual before projection counts as integration drift."""
+        q, v = self.q(y).copy(), self.v(y)
+        if mode is not None:
+            for _ in range(2):
+                psi = self.f.psi(mode, self.t, q)
+                g = self.f.gradient(mode, self.t, q)
+                gg = float(g @ g)
+                if gg == 0:
+                    break
+                q = q - psi * g / gg
+        if drift:
+            self.drift = max(self.drift, self.f.residual(mode, self.t, q, v))
+        v = self.f.project(mode, self.t, q, v)
+        return np.concatenate([q, v])
+
+    # -- the loop ---------------------------------------------------------------------------
+    def start(self) -> None:
+        """Resolve the walls touched at the initial state."""
+        hit = self.approaching()
+        if hit is not None:
+            self.impacts(*hit)
+        for w in range(self.walls):
+            if self.mode is None and abs(self.f.psi(w, self.t, self.q(self.y))) <= self.tol_psi:
+                rate = self.f.normal_rate(w, self.t, self.y)
+                if abs(rate) <= self.tol_v(self.y) and self.needs_push(w, self.y):
+                    self.enter_contact(w, rate, reason="initial state at rest on the wall")
+        if len(self.ts) and not np.array_equal(self.ys[-1], self.y):
+            self.record(self.t, self.y)
+
+    def run(self) -> tuple[str, str, float | None]:
+        t_end = self.o.t_end
+        try:
+            self.start()
+            self.flow.start(self.t, self.y, t_end)
+            while self.t < t_end:
+                seg = self.flow.advance()
+                ev = self.detect(seg)
+                if ev is None:
+                    y1 = seg.y1
+                    if self.mode is not None or self.f.constrained:
+                        self.t = seg.t1
+                        y1 = self.stabilise(self.mode, y1)
+                        self.flow.accept_projection(y1)
+                    self.segments.append((seg.t0, seg.t1, seg.dense))
+                    self.t, self.y = seg.t1, y1
+                    self.record(self.t, self.y)
+                    self.track_energy()
+                    continue
+                t_e, y_e, wall, what = ev
+                self.segments.append((seg.t0, t_e, seg.dense))
+                self.t, self.y = t_e, np.array(y_e, dtype=float)
+                self.record(self.t, self.y)
+                if what == "release":
+                    self.event("release", wall, self.y, self.y, 0.0)
+                    self.mode = None
+                else:
+                    self.at_wall(wall)
+                self.record(self.t, self.y)
+                self.flow.start(self.t, self.y, t_end)
+        except _Stop as stop:
+            return stop.status, stop.message, stop.accumulation
+        except FlowFailure as exc:
+            return "failed", str(exc), None
+        return "finished", f"reached t_end = {t_end!r}", None
+
+    def track_energy(self) -> None:
+        if self.f.energy_conserved:
+            e = self.f.energy(self.t, self.q(self.y), self.v(self.y))
+            self.energy_drift = max(self.energy_drift, abs(e - self.energy0 - self.energy_jumps))
+
+
+def run(fns: Any, flow: Flow, t0: float, y0: np.ndarray, opts: Options) -> SimulationResult:
+    """One hybrid run from (t0, y0) to ``opts.t_end`` (see the module docstring)."""
+    clock = _time.perf_counter()
+    r = _Run(fns, flow, t0, y0, opts)
+    status, message, accumulation = r.run()
+    wall_time = _time.perf_counter() - clock
+    st = flow.stats
+    kinds = [e.kind for e in r.events]
+    stats = {
+        "steps": st.steps,
+        "rejected_steps": st.rejected,
+        "rhs_calls": st.nfev,
+        "jacobian_calls": st.njev,
+        "wall_time": wall_time,
+        "constraint_drift": r.drift,
+        "energy_drift": r.energy_drift if fns.energy_conserved else None,
+        "impacts": kinds.count("impact"),
+        "grazing": kinds.count("grazing"),
+        "contacts": kinds.count("contact"),
+        "releases": kinds.count("release"),
+    }
+    ys = np.array(r.ys)
+    return SimulationResult(
+        t=np.array(r.ts),
+        q=ys[:, : r.n],
+        v=ys[:, r.n :],
+        events=r.events,
+        status=status,
+        message=message,
+        stats=stats,
+        segments=r.segments,
+        n=r.n,
+        accumulation_time=accumulation,
+    )

@@ -1,0 +1,365 @@
+"""The compiled functions of a hybrid system: free flight, walls, impacts and contact modes.
+
+A :class:`HybridSystem` is built once per scene, backend and parameter set and holds what
+the hybrid loop (:mod:`symmech.simulate.hybrid`) evaluates at a state:
+
+* the flow ``y_dot = rhs(t, y)`` with ``y = (q, v)`` (Carnot paper eq. 5: the constrained
+  acceleration when the scene has constraints), and for constrained scenes the projector
+  ``P(q)`` onto the distribution D (Carnot paper section 2.2) that removes the drift of
+  ``mu v`` after each step;
+* per wall: the gap ``psi(t, q)``, its rate ``d psi/dt = dpsi(q) q_dot + psi_t`` and the
+  closed-form impact map ``v+ = Phi(q, v-)`` of the scene (Carnot paper eqs. 10, 17, 20;
+  text 001 Theorem 2.12);
+* per static wall, the **contact mode**: the same system with the wall held as a permanent
+  holonomic constraint.  Its one-form is ``dpsi S`` in the velocity basis (S the frame, or
+  the identity) and, for a rough wall, the wall's impulsive constraints ``nu`` are kept
+  during contact (the body rolls on the wall).  The contact scene is an ordinary
+  :class:`~symmech.Scene` with the constraints ``[mu; dpsi S; nu]``, so its acceleration,
+  its multipliers and its projector come from the same derivation as every other scene
+  (Carnot paper eq. 5 and section 2.2).  The normal multiplier ``lambda_N`` (the entry of
+  ``dpsi S``) is the normal contact force: ``g v_dot = f + mu^T lambda + lambda_N (dpsi S)^T``
+  pushes into the admissible side while ``lambda_N > 0``; the contact is released when it
+  would turn negative.
+
+A moving wall (psi depends on t) has no contact mode: the contact constraint would be
+affine in v (``dpsi v + psi_t = 0``), which scenes do not declare; an accumulation of
+impacts on a moving wall ends the run with status ``"zeno"``.
+
+Parameters are checked once here (every parameter given, finite, and the signs and ranges
+the declaration states: positive symbols, restitution in [0, 1]), so that the loop's
+evaluations never fail on a bad parameter half way through a run.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from symmech.codegen import generate
+from symmech.codegen.module import NumericalError, SceneModule
+from symmech.declaration.symbols import t as TIME
+from symmech.errors import SymmechError
+from symmech.scene import Scene
+
+__all__ = ["BACKENDS", "HybridSystem", "SimulationError", "contact_scene"]
+
+#: Backends of the simulator: the loop in generated C, in Python over the generated NumPy
+#: module, or in Python around SciPy's ``OdeSolver`` classes over the generated C rhs.
+BACKENDS = ("c", "numpy", "scipy")
+
+
+class SimulationError(SymmechError, ValueError):
+    """A simulation cannot start: bad state, parameters, options or scene."""
+
+
+def contact_rows(scene: Scene, wall: int) -> list[list[sp.Expr]]:
+    """The constraint rows ``[mu; dpsi S; nu]`` of the contact mode of ``wall`` (velocity
+    basis): the scene's constraints, the wall's gradient, its impulsive constraints."""
+    decl = scene.declaration
+    w = scene.walls[wall]
+    if TIME in w.psi.free_symbols:
+        raise SimulationError(
+            f"wall {w.name!r} moves (psi depends on t): its contact constraint"
+            " dpsi v + psi_t = 0 is affine in v and has no contact mode"
+        )
+    grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in decl.coordinates]])
+    row = grad * decl.frame if decl.frame is not None else grad
+    rows = [list(decl.constraint_matrix.row(i)) for i in range(decl.m)]
+    rows.append(list(row))
+    rows.extend(list(w.impulsive_matrix.row(i)) for i in range(w.impulsive_matrix.rows))
+    return rows
+
+
+def contact_scene(scene: Scene, wall: int) -> Scene | None:
+    """The scene of ``scene`` in contact with static wall ``wall``: the constraints
+    :func:`contact_rows`, everything else unchanged; the normal multiplier is entry ``m``
+    (after the scene's own ``m`` multipliers).  None when the contact leaves no motion
+    (as many constraints as coordinates: the body is locked on the wall)."""
+    decl = scene.declaration
+    rows = contact_rows(scene, wall)
+    if len(rows) >= decl.n:
+        return None
+    return Scene(
+        decl.coordinates,
+        metric=decl.metric,
+        potential=decl.potential,
+        constraints=rows,
+        frame=decl.frame,
+        quasi_velocities=decl.velocities if decl.frame is not None else None,
+        parameters=decl.parameters,
+        name=f"{scene.name}_contact_{wall}",
+    )
+
+
+def _number(value: object, what: str) -> float:
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise SimulationError(f"{what}: expected a real number, got {value!r}") from exc
+    if isinstance(value, complex) or not math.isfinite(x):
+        raise SimulationError(f"{what}: expected a finite real number, got {value!r}")
+    return x
+
+
+def check_parameters(scene: Scene, params: object) -> dict[str, float]:
+    """``params`` as ``{name: value}``, every scene parameter given, finite, and with the
+    sign its symbol declares (positive, nonnegative) and restitutions in [0, 1]."""
+    names = [str(p) for p in scene.parameters]
+    if params is None:
+        params = {}
+    if isinstance(params, Mapping):
+        given = {str(k): v for k, v in params.items()}
+    else:
+        values = list(np.atleast_1d(np.asarray(params, dtype=object)))
+        if len(values) != len(names):
+            raise SimulationError(
+                f"params: expected {len(names)} values for {names}, got {len(values)}"
+            )
+        given = dict(zip(names, values, strict=True))
+    missing = [n for n in names if n not in given]
+    unknown = sorted(set(given) - set(names))
+    if missing or unknown:
+        raise SimulationError(
+            f"params: missing {missing}, unknown {unknown}; the scene's parameters are {names}"
+        )
+    out = {n: _number(given[n], f"params[{n!r}]") for n in names}
+    for p in scene.parameters:
+        x = out[str(p)]
+        if p.is_positive and not x > 0:
+            raise SimulationError(f"params[{str(p)!r}] is declared positive, got {x!r}")
+        if p.is_nonnegative and not x >= 0:
+            raise SimulationError(f"params[{str(p)!r}] is declared non-negative, got {x!r}")
+    subs = {p: sp.Float(out[str(p)]) for p in scene.parameters}
+    for w in scene.walls:
+        alpha = sp.sympify(w.restitution).xreplace(subs)
+        if alpha.is_number and not (0 <= float(alpha) <= 1):
+            raise SimulationError(
+                f"wall {w.name!r}: restitution {w.restitution} = {float(alpha)!r} at these"
+                " parameters is outside [0, 1]"
+            )
+    return out
+
+
+@dataclass
+class HybridSystem:
+    """The generated functions of ``scene`` for the hybrid loop (see the module docstring).
+
+    Build with :meth:`build`; ``modules`` maps ``None`` (free flight) and each static wall's
+    index (its contact mode) to a loaded :class:`~symmech.codegen.module.SceneModule`.
+    """
+
+    scene: Scene
+    target: str
+    strategy: str
+    definitions: Mapping[Any, Any]
+    modules: dict[int | None, SceneModule] = field(default_factory=dict)
+    _locked: dict[tuple[str, int], Any] = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def build(
+        cls,
+        scene: Scene,
+        target: str = "c",
+        *,
+        strategy: str = "auto",
+        definitions: Mapping[Any, Any] | None = None,
+    ) -> HybridSystem:
+        """Generate and load the free-flight module of ``scene`` for ``target``
+        (``"c"`` or ``"numpy"``); contact modes are generated on first use."""
+        if target not in ("c", "numpy"):
+            raise SimulationError(f"target must be 'c' or 'numpy', got {target!r}")
+        system = cls(scene, target, strategy, dict(definitions or {}))
+        system.modules[None] = system._load(scene)
+        return system
+
+    def _load(self, scene: Scene) -> SceneModule:
+        code = generate(
+            scene,
+            self.target,
+            strategy=self.strategy,
+            definitions=self.definitions or None,
+            projectors=scene.is_constrained,
+        )
+        return code.load()
+
+    @property
+    def n(self) -> int:
+        return self.scene.n
+
+    @property
+    def free(self) -> SceneModule:
+        return self.modules[None]
+
+    def has_contact_mode(self, wall: int) -> bool:
+        """Whether ``wall`` is static (a moving wall has no contact mode)."""
+        return TIME not in self.scene.walls[wall].psi.free_symbols
+
+    def contact(self, wall: int) -> SceneModule | None:
+        """The loaded contact-mode module of ``wall`` (generated on first use); None when
+        the contact locks the body (:func:`contact_scene`)."""
+        if wall not in self.modules:
+            cs = contact_scene(self.scene, wall)
+            self.modules[wall] = None if cs is None else self._load(cs)  # type: ignore[assignment]
+        return self.modules[wall]
+
+    def locked_force(self, wall: int) -> Any:
+        """For a contact that locks the body: ``lambda_N(t, q, params)`` from the statics
+        ``A^T lambda = -f(q, 0)`` (Carnot paper eq. 5 at rest; A the contact rows), as a
+        NumPy function of (t, q, p) (p in the order of the scene's parameters)."""
+        key = ("locked", wall)
+        if key not in self._locked:
+            decl = self.scene.declaration
+            A = sp.Matrix(contact_rows(self.scene, wall))
+            f0 = sp.Matrix(self.scene.forcing()).xreplace({v: 0 for v in decl.velocities})
+            lam = A.T.LUsolve(-f0)
+            expr = lam[decl.m]
+            args = [TIME, sp.Matrix(decl.coordinates), sp.Matrix(decl.parameters)]
+            self._locked[key] = sp.lambdify(args, expr, modules="numpy", cse=True)
+        return self._locked[key]
+
+    def normal_index(self, wall: int) -> int:
+        """Index of the normal multiplier lambda_N in the contact mode's multipliers."""
+        del wall
+        return self.scene.constraint_matrix.rows
+
+
+class Functions:
+    """The evaluations the hybrid loop makes, over a :class:`HybridSystem` at fixed
+    parameters, in float64.  ``mode`` is ``None`` (free flight) or the index of the wall in
+    contact.  Every method takes and returns NumPy arrays of float64 (scalars as floats)."""
+
+    def __init__(self, system: HybridSystem, params: Mapping[str, float]):
+        self.system = system
+        self.n = system.n
+        self.walls = len(system.scene.walls)
+        self.constrained = system.scene.is_constrained
+        self.moving = tuple(not system.has_contact_mode(w) for w in range(self.walls))
+        self.wall_names = tuple(w.name for w in system.scene.walls)
+        #: The flow conserves T + V: the potential does not depend on t (ideal constraints
+        #: and contact constraints do no work).
+        self.energy_conserved = TIME not in sp.sympify(system.scene.potential).free_symbols
+        self._params = dict(params)
+        free = system.free
+        if free.inputs:
+            raise SimulationError(
+                f"scene {system.scene.name!r} has arbitrary functions of time {list(free.inputs)}:"
+                " give their expressions with definitions={f: expression}"
+            )
+        #: The mode the flow integrates (None: free flight; a wall's index: in contact).
+        self.mode: int | None = None
+        self._p: dict[int | None, np.ndarray | None] = {}
+        self._takes_t: dict[tuple[int | None, str], bool] = {}
+
+    # -- plumbing -------------------------------------------------------------------------
+    def _module(self, mode: int | None) -> SceneModule | None:
+        return self.system.free if mode is None else self.system.contact(mode)
+
+    def _pvec(self, mode: int | None) -> np.ndarray | None:
+        if mode not in self._p:
+            mod = self._module(mode)
+            assert mod is not None
+            names = mod.parameters
+            self._p[mode] = (
+                np.array([self._params[k] for k in names], dtype=np.float64) if names else None
+            )
+            for f in mod.code.functions:
+                self._takes_t[(mode, f.name)] = f.takes_time
+        return self._p[mode]
+
+    def locked(self, mode: int | None) -> bool:
+        """Whether ``mode`` is a contact that leaves no motion (the body rests)."""
+        return mode is not None and self.system.contact(mode) is None
+
+    def _call(self, mode: int | None, name: str, t: float, *state: np.ndarray) -> np.ndarray:
+        p = self._pvec(mode)
+        mod = self._module(mode)
+        assert mod is not None
+        tt = t if self._takes_t.get((mode, name), False) else None
+        return mod.call(name, *state, params=p, t=tt)
+
+    def _wall_name(self, kind: str, wall: int) -> str:
+        return self.system.free._wall_function(kind, wall)
+
+    # -- the evaluations --------------------------------------------------------------------
+    def rhs(self, mode: int | None, t: float, y: np.ndarray) -> np.ndarray:
+        """y_dot = (q_dot, v_dot) in free flight (mode None) or in contact with a wall."""
+        if self.locked(mode):
+            return np.zeros_like(y)
+        try:
+            return self._call(mode, "rhs", t, y)
+        except NumericalError:
+            # a trial stage far outside the solution: NaN makes the integrator reject it
+            return np.full_like(y, np.nan)
+
+    def flow_rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """y_dot in the current :attr:`mode` (the flow's right-hand side)."""
+        return self.rhs(self.mode, t, y)
+
+    def flow_rates(self, t: float, y: np.ndarray, ydot: np.ndarray) -> np.ndarray:
+        """d psi_w/dt of every wall along the flow (for :class:`~.flow.AugmentedFlow`)."""
+        return np.array([self.rate(w, t, y, ydot) for w in range(self.walls)])
+
+    def gaps(self, t: float, y: np.ndarray) -> np.ndarray:
+        """psi_w(t, q) of every wall."""
+        return np.array([self.psi(w, t, y[: self.n]) for w in range(self.walls)])
+
+    def psi(self, wall: int, t: float, q: np.ndarray) -> float:
+        """The gap of ``wall`` at (t, q)."""
+        return float(self._call(None, self._wall_name("psi", wall), t, q))
+
+    def rate(self, wall: int, t: float, y: np.ndarray, ydot: np.ndarray) -> float:
+        """d psi/dt = dpsi(q) q_dot + psi_t along the flow (q_dot from ``ydot``)."""
+        n = self.n
+        q = y[:n]
+        g = self._call(None, self._wall_name("dpsi", wall), t, q)
+        r = float(np.dot(g, ydot[:n]))
+        if self.moving[wall]:
+            r += float(self._call(None, self._wall_name("psi_t", wall), t, q))
+        return r
+
+    def normal_rate(self, wall: int, t: float, y: np.ndarray) -> float:
+        """d psi/dt at a state (q_dot from the kinematics of the free flow)."""
+        return self.rate(wall, t, y, self.rhs(None, t, y))
+
+    def gradient(self, wall: int, t: float, q: np.ndarray) -> np.ndarray:
+        """d psi/d q of ``wall`` (coordinates)."""
+        return self._call(None, self._wall_name("dpsi", wall), t, q)
+
+    def impact(self, wall: int, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """v+ of the scene's closed-form (or KKT) impact map at ``wall``."""
+        return self._call(None, self._wall_name("impact", wall), t, q, v)
+
+    def energy(self, t: float, q: np.ndarray, v: np.ndarray) -> float:
+        """T + V."""
+        return float(self._call(None, "energy", t, q, v))
+
+    def project(self, mode: int | None, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """P(q) v: v projected g-orthogonally onto the mode's distribution."""
+        if mode is None and not self.constrained:
+            return v
+        if self.locked(mode):
+            return np.zeros_like(v)
+        P = self._call(mode, "projector_P", t, q)
+        return P @ v
+
+    def residual(self, mode: int | None, t: float, q: np.ndarray, v: np.ndarray) -> float:
+        """max |mu v| of the mode's constraints (0 for an unconstrained free flight)."""
+        if mode is None and not self.constrained:
+            return 0.0
+        if self.locked(mode):
+            return float(np.max(np.abs(v), initial=0.0))
+        return float(np.max(np.abs(self._call(mode, "constraint_residual", t, q, v))))
+
+    def normal_force(self, wall: int, t: float, q: np.ndarray, v: np.ndarray) -> float:
+        """lambda_N of the contact mode of ``wall`` at (q, v): positive while the wall
+        pushes."""
+        if self.locked(wall):
+            p = [self._params[str(s)] for s in self.system.scene.parameters]
+            return float(self.system.locked_force(wall)(t, q, p))
+        lam = self._call(wall, "multipliers", t, q, v)
+        return float(lam[self.system.normal_index(wall)])
