@@ -56,6 +56,7 @@ Rules the stages enforce:
 from __future__ import annotations
 
 import itertools
+import warnings
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -63,6 +64,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from symmech.declaration.admissible import NON_SMOOTH, expression_problems
+from symmech.declaration.definiteness import definiteness
 from symmech.declaration.expressions import to_expression
 from symmech.declaration.numeric import (
     EvaluationError,
@@ -81,7 +83,8 @@ from symmech.declaration.sampling import atom_key, sample_points
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.symbols import velocity_of
 from symmech.declaration.wall import Wall
-from symmech.errors import SceneError
+from symmech.declaration.wallpoints import vanishing_gradient
+from symmech.errors import SceneError, UndecidedWarning
 
 __all__ = ["NON_SMOOTH", "Declaration", "ResolvedWall", "declare"]
 
@@ -359,8 +362,9 @@ def declare(
         if T is not None:
             fields.append(metric_field := _Field("kinetic_energy", T, q_set | v_set, True))
     V = expr(potential if potential is not None else 0, "potential")
+    potential_field = None
     if V is not None:
-        fields.append(_Field("potential", V, q_set | t_set))
+        fields.append(potential_field := _Field("potential", V, q_set | t_set))
     constraint_fields = [
         _velocity_form_field(c, f"constraints[{a}]", n, q_set, v_set, expr, problems)
         for a, c in enumerate(constraint_items)
@@ -399,11 +403,16 @@ def declare(
     if frame_field is not None and frame_field.ok:
         _check_frame(S, points, problems)
     if metric_field is not None and metric_field.ok and G is not None:
-        _check_metric(G, "metric", points, problems)
+        _check_metric(G, "metric", points, problems, q)
     elif metric_field is not None and metric_field.ok and T is not None and basis_ok:
         G = _metric_from_kinetic_energy(T, v, q, problems)
         if G is not None:
-            _check_metric(G, "kinetic_energy (its metric, the Hessian of T)", points, problems)
+            _check_metric(
+                G, "kinetic_energy (its metric, the Hessian of T)", points, problems, q, T
+            )
+
+    if potential_field is not None and potential_field.ok:
+        _check_real(V, "potential", points, problems)
 
     rows = [
         _constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
@@ -428,6 +437,12 @@ def declare(
                 f"{label}.psi = {_short(psi_field.value)} does not depend on the coordinates"
                 f" {list(q)}"
             )
+        elif (
+            psi_field is not None
+            and psi_field.ok
+            and _check_real(psi_field.value, f"{label}.psi", points, problems)
+        ):
+            _check_wall_gradient(psi_field.value, f"{label}.psi", q, points, problems)
         nu_rows = [
             _constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
             for f in nu_fields
@@ -827,9 +842,18 @@ def _metric_from_kinetic_energy(
         return None
 
 
-def _check_metric(G: sp.Matrix, label: str, points: _Points, problems: _Problems) -> None:
+def _check_metric(
+    G: sp.Matrix,
+    label: str,
+    points: _Points,
+    problems: _Problems,
+    q: Sequence[sp.Symbol],
+    T: sp.Expr | None = None,
+) -> None:
     """Symmetric, and positive definite: proven symbolically for a diagonal metric of
-    positive terms, else at sampled points (indefinite at one, or singular at all, refuses)."""
+    positive terms, else at sampled points (indefinite at one, or singular at all, refuses),
+    then over every value of the coordinates (:mod:`symmech.declaration.definiteness`:
+    indefinite somewhere refuses, undecided warns)."""
     n = G.rows
     pts = points.for_(G)
     asym = [
@@ -878,6 +902,96 @@ def _check_metric(G: sp.Matrix, label: str, points: _Points, problems: _Problems
         problems.add(
             f"{label}: singular (determinant identically 0): singular at every sampled point"
             f"{_at(point, G).replace(' at the sampled point', ', e.g.')} ({evidence})"
+        )
+    else:
+        _check_everywhere(G, label, pts, problems, q, T)
+
+
+def _check_everywhere(
+    G: sp.Matrix,
+    label: str,
+    pts: list[dict],
+    problems: _Problems,
+    q: Sequence[sp.Symbol],
+    T: sp.Expr | None,
+) -> None:
+    """Positive definiteness away from the sampled points (see :func:`definiteness`)."""
+    verdict = definiteness(G, q, pts, kinetic_energy=T)
+    if verdict.status == "refuted":
+        where = _at(verdict.point, G).replace(" at the sampled point", " at the point")
+        problems.add(
+            f"{label}: not positive definite{where} ({verdict.detail}), a point found by"
+            " searching from the sampled points"
+        )
+    elif verdict.status == "undecided":
+        warnings.warn(
+            f"{label}: positive definiteness is undecided: {verdict.detail}; symmech"
+            " accepts the metric, but it may be indefinite elsewhere",
+            UndecidedWarning,
+            stacklevel=5,
+        )
+
+
+def _check_real(e: sp.Expr, label: str, points: _Points, problems: _Problems) -> bool:
+    """Whether ``e`` is real at the sampled points: complex at every one where it has a
+    value refuses it (``sqrt(-x**2 - 1)``, ``log(-1 - x**2)``), complex at some warns (its
+    real domain is restricted, and symmech does not check that motions stay in it)."""
+    if not e.free_symbols:
+        return True
+    M = sp.Matrix([[e]])
+    flags = []
+    for point in points.for_(e):
+        try:
+            _, complex_ = real_values(M, point)
+        except EvaluationError:
+            continue
+        flags.append((complex_, point))
+    complex_at = [point for complex_, point in flags if complex_]
+    if flags and len(complex_at) == len(flags):
+        problems.add(
+            f"{label} = {_short(e)}: not real at any sampled point (e.g."
+            f"{_at(complex_at[0], e).replace(' at the sampled point', '')}): a scene's fields"
+            " are real functions"
+        )
+        return False
+    if complex_at:
+        warnings.warn(
+            f"{label} = {_short(e)}: not real{_at(complex_at[0], e)} (real at"
+            f" {len(flags) - len(complex_at)} of {len(flags)} sampled points): its real"
+            " domain is restricted, and symmech does not check that motions stay in it",
+            UndecidedWarning,
+            stacklevel=4,
+        )
+    return True
+
+
+def _check_wall_gradient(
+    psi: sp.Expr, label: str, q: Sequence[sp.Symbol], points: _Points, problems: _Problems
+) -> None:
+    """Refuse a wall whose gradient vanishes on it (``x**2``, ``sin(x)**2``, ``(x - 1)**2*(y
+    + 2)``); warn when no point of the wall was found to check (see
+    :mod:`symmech.declaration.wallpoints`)."""
+    point, found = vanishing_gradient(psi, q, points.for_(psi))
+    if point is not None:
+        shown = ", ".join(
+            f"{k}={sp.N(v, 6) if isinstance(v, sp.Float) else v}"
+            for k, v in sorted(point.items(), key=lambda kv: atom_key(kv[0]))
+            if psi.has(k)
+        )
+        problems.add(
+            f"{label} = {_short(psi)}: its gradient d psi/dq vanishes on the wall, e.g. at"
+            f" {{{shown}}} (psi = 0 and d psi = 0 there): an impact there has no normal"
+            " direction, so psi = 0 is not a regular wall (Carnot paper section 3.1 assumes"
+            " d psi != 0 on the wall); write psi so that it changes sign across the wall"
+            " with a nonzero gradient (x, not x**2)"
+        )
+    elif not found:
+        warnings.warn(
+            f"{label} = {_short(psi)}: no point of the wall psi = 0 was found from the sampled"
+            " points, so symmech could not check that d psi != 0 on it (a wall that is never"
+            " reached, or one reached only at isolated points such as x**2 + y**2 = 0)",
+            UndecidedWarning,
+            stacklevel=4,
         )
 
 

@@ -11,7 +11,13 @@ along N"; section 3.2: the same for ``{mu^a, d psi, nu^B}``).
   walls for which C is singular *on the wall*: impacts happen only where ``psi = 0``, and
   a wall such as ``psi = y`` with the constraint ``y x_dot + y_dot = 0`` has its gradient
   in the constraint span exactly there.  The points of the wall are found by
-  :func:`points_on_wall` (psi solved for one coordinate near each sampled point).
+  :func:`~symmech.declaration.wallpoints.points_on_wall` (psi solved for one coordinate
+  near each sampled point).
+* Walls whose gradient itself vanishes on the wall (``psi = x**2``, ``x**3``,
+  ``sin(x)**2``, ``(x - 1)**2*(y + 2)``: C = 0 there whatever the constraints) never reach
+  this module: the declaration refuses them
+  (:func:`symmech.declaration.wallpoints.vanishing_gradient`, Newton's method for the
+  multiple roots where psi and d psi vanish together).
 * :func:`singular_set` lists the expressions whose vanishing makes the closed form
   undefined (denominators), with a description, so that a user can guard generated code
   instead of meeting NaN later.
@@ -28,6 +34,7 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
+from symmech.declaration.wallpoints import points_on_wall
 from symmech.errors import ImpactError
 from symmech.impacts.adjugate import shared_denominators
 
@@ -130,41 +137,6 @@ def _identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
         if s.is_number:
             return False
     return bool(finite)
-
-
-def points_on_wall(
-    psi: sp.Expr, coordinates: Sequence[sp.Symbol], points: Sequence[dict], dps: int = 40
-) -> list[dict]:
-    """Points of the wall ``psi = 0`` near the sampled ``points``: for each, ``psi`` is
-    solved (:func:`mpmath.findroot`, ``dps`` digits) for the first coordinate it depends
-    on that gives a real root, starting from the sampled value and a few others; the
-    other values are kept.  A point where no root is found is left out (a wall that is
-    never reached gives none)."""
-    deps = [qj for qj in coordinates if sp.diff(psi, qj) != 0]
-    out = []
-    for point in points:
-        for qj in deps:
-            # the other coordinates, parameters, t and arbitrary functions of t (f(t) is a
-            # key of the point: xreplace replaces it whole) fixed at their sampled values
-            f_expr = psi.xreplace({k: v for k, v in point.items() if k != qj})
-            if f_expr.free_symbols - {qj} or f_expr.atoms(sp.core.function.AppliedUndef):
-                continue  # something without a value: psi cannot be solved here
-            fn = sp.lambdify(qj, f_expr, "mpmath")
-            root = None
-            with mp.workdps(dps + 10):
-                for x0 in (point[qj], 0, 1, -1, 2, -2):
-                    try:
-                        x = mp.findroot(fn, mp.mpf(sp.N(x0, dps + 10)))
-                        value = fn(x)
-                    except (ValueError, ZeroDivisionError, TypeError, OverflowError):
-                        continue
-                    if mp.im(x) == 0 and abs(value) < mp.mpf(10) ** (5 - dps):
-                        root = sp.Float(mp.re(x), dps)
-                        break
-            if root is not None:
-                out.append({**point, qj: root})
-                break
-    return out
 
 
 def _wall_gradient_ratio(

@@ -1,0 +1,423 @@
+"""Positive definiteness of a metric on the whole configuration space, not only at samples.
+
+The declaration first judges the metric g(q) at a few sampled points (``spec._check_metric``):
+indefinite at one of them refuses it.  A metric indefinite on a narrow part of the domain
+passes that test (``diag(1, 1 + 101/100 sin x)`` is indefinite only for ``|x + pi/2| <
+0.14``, ``diag(1, x**2 - 1/100)`` only for ``|x| < 0.1``).  :func:`definiteness` then
+decides, for the parameter values of each sampled point, over every value of the
+coordinates:
+
+1. **proven** positive semidefinite everywhere (singular points are allowed, as in
+   ``diag(1, r**2)``; a metric singular everywhere was refused before), by
+
+   * the kinetic energy: ``T`` a sum of nonnegative terms (``m/2 (x_dot + l cos q
+     q_dot)**2 + ...``, :func:`~symmech.declaration.numeric.proven_sign` with the
+     velocities real) makes g positive semidefinite at every q;
+   * interval arithmetic (:mod:`mpmath.iv`, outward rounding) over the whole range of
+     each coordinate (from its assumptions; ``sin`` and ``cos`` in [-1, 1], even powers
+     nonnegative): for a diagonal metric each diagonal entry has a lower bound >= 0; for
+     n <= 3 the leading principal minors ``D_1, ..., D_{n-1}`` have lower bounds > 0 and
+     ``det g`` >= 0 (Sylvester's criterion, with the limit case det g = 0);
+   * exact real roots (:func:`sympy.real_roots`) of a diagonal entry that is a polynomial
+     in one coordinate: it is nonnegative iff it is between and beyond its roots;
+
+2. **refuted**: a point where g is indefinite, found by the exact roots above or by a
+   compass search from each sampled point, minimising a diagonal entry or the smallest
+   eigenvalue of g scaled to unit diagonal (``D^-1/2 g D^-1/2``, free of units); the
+   point is confirmed by :func:`~symmech.declaration.numeric.classify_symmetric` at a
+   rational point near it;
+
+3. **undecided** otherwise: the searches found g positive definite everywhere they went,
+   but nothing proves it elsewhere.  The caller warns (:class:`~symmech.UndecidedWarning`).
+
+Everything is evaluated in float64 tree walks (:mod:`symmech.declaration.numeric`) and
+interval arithmetic; nothing calls ``sympy.simplify``.  The search is bounded by
+:data:`SEARCH_EVALUATIONS` evaluations per sampled point.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Literal
+
+import mpmath
+import numpy as np
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from symmech.declaration.numeric import (
+    EvaluationError,
+    classify_symmetric,
+    evaluate,
+    evaluate_matrix,
+    proven_sign,
+    real_values,
+)
+
+__all__ = ["SEARCH_EVALUATIONS", "Verdict", "definiteness", "lower_bound"]
+
+#: Evaluations of the objective allowed to the compass search from one sampled point.
+SEARCH_EVALUATIONS = 120
+#: Leading principal minors are formed symbolically (Berkowitz, no simplification) up to
+#: this size of metric.
+MINORS_MAX_N = 3
+#: Polynomials up to this degree have their real roots isolated exactly.
+ROOTS_MAX_DEGREE = 12
+
+_IV = mpmath.iv
+_INF = mpmath.inf
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """``status``: "proven", "refuted" or "undecided"; ``detail``: how (for messages);
+    ``point``: the sampled point with the coordinates where g is indefinite (refuted)."""
+
+    status: Literal["proven", "refuted", "undecided"]
+    detail: str
+    point: Mapping = field(default_factory=dict)
+
+
+# -- interval arithmetic -------------------------------------------------------------------
+
+
+def _assumed_range(atom: sp.Basic) -> mpmath.ctx_iv.ivmpf:
+    if atom.is_positive:
+        return _IV.mpf([0, _INF])
+    if atom.is_nonnegative:
+        return _IV.mpf([0, _INF])
+    if atom.is_negative or atom.is_nonpositive:
+        return _IV.mpf([-_INF, 0])
+    return _IV.mpf([-_INF, _INF])
+
+
+def _lo(x: mpmath.ctx_iv.ivmpf) -> mpmath.mpf:
+    return mpmath.mpf(x._mpi_[0])
+
+
+def _hi(x: mpmath.ctx_iv.ivmpf) -> mpmath.mpf:
+    return mpmath.mpf(x._mpi_[1])
+
+
+def _interval(e: sp.Basic, fixed: Mapping, memo: dict) -> mpmath.ctx_iv.ivmpf | None:
+    """An enclosure of ``e`` over the ranges (atoms in ``fixed`` are points); None when
+    unknown (an unbounded or complex part, a function without an interval rule)."""
+    if e in memo:
+        return memo[e]
+    out = None
+    if e in fixed:
+        v = sp.Rational(fixed[e]) if not isinstance(fixed[e], sp.Basic) else fixed[e]
+        out = _interval(v, {}, {}) if v.is_number else None
+    elif e.is_Rational:
+        out = _IV.mpf(int(e.p)) / int(e.q)
+    elif e.is_Float:
+        out = _IV.mpf(mpmath.mpf(e._mpf_))
+    elif e is sp.pi:
+        out = _IV.pi
+    elif e is sp.E:
+        out = _IV.e
+    elif isinstance(e, sp.Symbol | AppliedUndef | sp.Derivative):
+        out = _assumed_range(e)
+    elif e.is_Add or e.is_Mul:
+        parts = [_interval(a, fixed, memo) for a in e.args]
+        if all(p is not None for p in parts):
+            out = parts[0]
+            for p in parts[1:]:
+                out = out + p if e.is_Add else out * p
+    elif e.is_Pow:
+        out = _power(e, fixed, memo)
+    elif e.args:
+        out = _function(e, fixed, memo)
+    memo[e] = out
+    return out
+
+
+def _power(e: sp.Pow, fixed: Mapping, memo: dict) -> mpmath.ctx_iv.ivmpf | None:
+    base = _interval(e.base, fixed, memo)
+    if base is None:
+        return None
+    if e.exp.is_Integer:
+        k = int(e.exp)
+        if k < 0 and _lo(base) <= 0 <= _hi(base):
+            if k % 2:
+                return None  # 1/0 inside the range, of either sign
+            # an even power is positive where it is defined
+            reach = max(abs(_lo(base)), abs(_hi(base)))
+            return _IV.mpf([0, _INF]) if reach == _INF else _IV.mpf([0, _INF]) + reach**k
+        return base**k
+    if e.exp.is_Rational and _lo(base) >= 0 and (e.exp > 0 or _lo(base) > 0):
+        return base ** (_IV.mpf(int(e.exp.p)) / int(e.exp.q))
+    return None
+
+
+def _function(e: sp.Basic, fixed: Mapping, memo: dict) -> mpmath.ctx_iv.ivmpf | None:
+    if isinstance(e, sp.sin | sp.cos | sp.tanh | sp.atan):
+        arg = _interval(e.args[0], fixed, memo)
+        if isinstance(e, sp.tanh):
+            return _IV.mpf([-1, 1])
+        if isinstance(e, sp.atan):
+            return _IV.mpf([-1, 1]) * _IV.pi / 2
+        if arg is None or _hi(arg) - _lo(arg) > 7:
+            return _IV.mpf([-1, 1])
+        return _IV.sin(arg) if isinstance(e, sp.sin) else _IV.cos(arg)
+    arg = _interval(e.args[0], fixed, memo) if len(e.args) == 1 else None
+    if arg is None:
+        return None
+    try:
+        if isinstance(e, sp.exp):
+            return _IV.exp(arg)
+        if isinstance(e, sp.log) and _lo(arg) > 0:
+            return _IV.log(arg)
+        if isinstance(e, sp.cosh):
+            return (_IV.exp(arg) + _IV.exp(-arg)) / 2
+        if isinstance(e, sp.sinh) and _hi(arg) < _INF and _lo(arg) > -_INF:
+            return (_IV.exp(arg) - _IV.exp(-arg)) / 2
+    except (ArithmeticError, ValueError):
+        return None
+    return None
+
+
+def lower_bound(expr: sp.Expr, fixed: Mapping) -> mpmath.mpf | None:
+    """A rigorous lower bound of ``expr`` over the range of its free atoms (from their
+    assumptions; the atoms in ``fixed`` at those values), or None when none is found.
+
+    >>> import sympy as sp
+    >>> x = sp.Symbol("x", real=True)
+    >>> lower_bound(2 + sp.sin(x), {}), lower_bound(x**2 - sp.Rational(1, 100), {})
+    (mpf('1.0'), mpf('-0.01'))
+    """
+    try:
+        with mpmath.workprec(53):
+            bound = _interval(sp.sympify(expr), fixed, {})
+    except (ArithmeticError, ValueError, TypeError, RecursionError):
+        return None
+    if bound is None:
+        return None
+    lo = _lo(bound)
+    return None if mpmath.isnan(lo) else lo
+
+
+# -- exact roots -----------------------------------------------------------------------------
+
+
+def _exact_sign(entry: sp.Expr, coordinate: sp.Symbol) -> tuple[str, sp.Rational | None] | None:
+    """("nonneg", None) or ("negative", where) for a polynomial in one real coordinate with
+    rational coefficients; None when ``entry`` is not one (or too large)."""
+    try:
+        poly = sp.Poly(entry, coordinate)
+    except sp.PolynomialError:
+        return None
+    exact = poly.domain.is_QQ or poly.domain.is_ZZ
+    if not exact or not 1 <= poly.degree() <= ROOTS_MAX_DEGREE:
+        return None
+    try:
+        roots = sorted({sp.Rational(str(r.evalf(30))) for r in sp.real_roots(poly)})
+    except (NotImplementedError, sp.PolynomialError):
+        return None
+    lo = 0 if coordinate.is_nonnegative else -math.inf
+    roots = [r for r in roots if r >= lo]
+    if roots:
+        tests = [roots[0] - 1, *((a + b) / 2 for a, b in itertools.pairwise(roots)), roots[-1] + 1]
+    else:
+        tests = [sp.Integer(1)]
+    for t in tests:
+        if t >= lo and poly.eval(t) < 0:
+            return "negative", t
+    return "nonneg", None
+
+
+# -- search ----------------------------------------------------------------------------------
+
+
+def _compass(
+    objective: Callable[[dict], float], start: dict, variables: Sequence[sp.Symbol]
+) -> tuple[float, dict]:
+    """Minimise ``objective`` from ``start`` by compass search (step halving), stopping at
+    a negative value or after :data:`SEARCH_EVALUATIONS` evaluations."""
+    x = dict(start)
+    f = objective(x)
+    step, evaluations = 0.5, 1
+    while evaluations < SEARCH_EVALUATIONS and step > 1e-6 and f >= 0:
+        moved = False
+        for v in variables:
+            for sign in (1.0, -1.0):
+                y = {**x, v: x[v] + sign * step}
+                fy = objective(y)
+                evaluations += 1
+                if fy < f:
+                    x, f, moved = y, fy, True
+                    break
+            if f < 0 or evaluations >= SEARCH_EVALUATIONS:
+                break
+        step = step * 2 if moved and step < 4 else step / 2 if not moved else step
+    return f, x
+
+
+def _float_point(point: Mapping) -> dict:
+    out = {}
+    for k, v in point.items():
+        try:
+            out[k] = float(v)
+        except TypeError:
+            out[k] = complex(v).real
+    return out
+
+
+def _rational_point(point: Mapping, coordinates: Sequence[sp.Symbol], digits: int) -> dict:
+    scale = 10**digits
+    return {
+        **point,
+        **{c: sp.Rational(round(float(point[c]) * scale), scale) for c in coordinates},
+    }
+
+
+def _confirm(
+    G: sp.MatrixBase, found: Mapping, sample: Mapping, coordinates: Sequence[sp.Symbol]
+) -> tuple[dict, str] | None:
+    """The indefiniteness found at ``found`` (floats), confirmed at a rational point."""
+    for digits in (4, 8, 16):
+        point = _rational_point({**sample, **found}, coordinates, digits)
+        try:
+            A, complex_ = real_values(G, point)
+        except EvaluationError:
+            continue
+        if complex_:
+            continue
+        verdict, evidence = classify_symmetric(A)
+        if verdict == "indefinite":
+            return point, evidence
+    return None
+
+
+def _scaled_min_eigenvalue(G: sp.MatrixBase) -> Callable[[dict], float]:
+    def objective(point: dict) -> float:
+        try:
+            A = evaluate_matrix(G, point).real
+        except EvaluationError:
+            return math.inf
+        d = np.diag(A)
+        if (d <= 0).any():
+            return float(d.min() / max(abs(d).max(), 1e-300)) - 1.0
+        s = np.sqrt(d)
+        with np.errstate(all="ignore"):
+            B = A / s[:, None] / s[None, :]
+        if not np.isfinite(B).all():
+            return math.inf
+        return float(np.linalg.eigvalsh((B + B.T) / 2)[0]) + 1e-12
+
+    return objective
+
+
+def _entry(e: sp.Expr) -> Callable[[dict], float]:
+    def objective(point: dict) -> float:
+        try:
+            value = evaluate(e, point)
+        except EvaluationError:
+            return math.inf
+        return value.real if abs(value.imag) <= 1e-12 * max(abs(value), 1e-300) else math.inf
+
+    return objective
+
+
+def definiteness(
+    G: sp.MatrixBase,
+    coordinates: Sequence[sp.Symbol],
+    points: Sequence[Mapping],
+    *,
+    kinetic_energy: sp.Expr | None = None,
+) -> Verdict:
+    """Decide whether the metric ``G`` is positive semidefinite at every value of the
+    ``coordinates``, for the parameter values of each of the sampled ``points`` (see the
+    module docstring).  ``G`` must already have passed the sampled check."""
+    if kinetic_energy is not None and proven_sign(kinetic_energy) in ("pos", "nonneg"):
+        return Verdict("proven", "the kinetic energy is a sum of nonnegative terms")
+    n = G.rows
+    q = [c for c in coordinates if c in set().union(*(e.free_symbols for e in G))]
+    if not q:
+        return Verdict("proven", "the metric does not depend on the coordinates")
+    diagonal = all(G[i, j] == 0 for i in range(n) for j in range(n) if i != j)
+    minors = (
+        [G[:k, :k].det(method="berkowitz") for k in range(1, n + 1)]
+        if not diagonal and n <= MINORS_MAX_N
+        else []
+    )
+    undecided: list[str] = []
+    for sample in points:
+        fixed = {k: v for k, v in sample.items() if k not in q}
+        if diagonal:
+            verdict = _diagonal(G, q, sample, fixed, undecided)
+        else:
+            verdict = _full(G, q, minors, sample, fixed, undecided)
+        if verdict is not None:
+            return verdict
+    if undecided:
+        return Verdict("undecided", undecided[0])
+    return Verdict("proven", "by interval arithmetic over the coordinates")
+
+
+def _diagonal(
+    G: sp.MatrixBase, q: Sequence[sp.Symbol], sample: Mapping, fixed: Mapping, undecided: list
+) -> Verdict | None:
+    for i in range(G.rows):
+        e = G[i, i]
+        if not (e.free_symbols & set(q)) or proven_sign(e) in ("pos", "nonneg"):
+            continue
+        bound = lower_bound(e, fixed)
+        if bound is not None and bound >= 0:
+            continue
+        at_sample = e.xreplace({k: v for k, v in fixed.items()})
+        own = [c for c in q if c in at_sample.free_symbols]
+        if len(own) == 1 and not (at_sample.free_symbols - set(own)):
+            exact = _exact_sign(at_sample, own[0])
+            if exact is not None and exact[0] == "nonneg":
+                continue
+            if exact is not None:
+                point = {**sample, own[0]: exact[1]}
+                A, _ = real_values(G, point)
+                return Verdict("refuted", classify_symmetric(A)[1], point)
+        mine = [c for c in q if c in e.free_symbols]
+        value, where = _compass(_entry(e), _float_point(sample), mine)
+        if value < 0:
+            confirmed = _confirm(G, where, sample, q)
+            if confirmed is not None:
+                return Verdict("refuted", confirmed[1], confirmed[0])
+        undecided.append(
+            f"diagonal entry [{i},{i}] = {_short(e)} is not proven nonnegative (its interval"
+            " bound is not), and no point where it is negative was found"
+        )
+    return None
+
+
+def _full(
+    G: sp.MatrixBase,
+    q: Sequence[sp.Symbol],
+    minors: Sequence[sp.Expr],
+    sample: Mapping,
+    fixed: Mapping,
+    undecided: list,
+) -> Verdict | None:
+    n = G.rows
+    if minors:
+        bounds = [lower_bound(m, fixed) for m in minors]
+        if all(b is not None for b in bounds) and all(b > 0 for b in bounds[:-1]):
+            if bounds[-1] >= 0:
+                return None
+    value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q)
+    if value < 0:
+        confirmed = _confirm(G, where, sample, q)
+        if confirmed is not None:
+            return Verdict("refuted", confirmed[1], confirmed[0])
+    undecided.append(
+        "not proven positive definite for every value of the coordinates (interval bounds"
+        f"{' of its leading minors' if n <= MINORS_MAX_N else ''} do not prove it), and a"
+        " local search from the sampled points found no point where it is indefinite"
+    )
+    return None
+
+
+def _short(expr: object, limit: int = 50) -> str:
+    s = str(expr)
+    return s if len(s) <= limit else s[: limit - 3] + "..."
