@@ -16,9 +16,11 @@ velocity tolerance ``tol_v = atol + rtol |v|_inf``:
   with the most negative normal rate first (ties: the lowest index), until none approaches:
   the sequential rule, deterministic, and for a row of equal elastic balls (Newton's
   cradle) the velocity passes down the row.
-* ``|r| <= tol_v``: the wall is reached tangentially, a **grazing** contact: reported, no
-  impact map.  If the wall would have to push to stay out of it (lambda_N > 0 in its
-  contact mode) the body stays on it: **contact**.
+* ``|r| <= tol_v``: the wall is reached tangentially.  If the wall would have to push to
+  keep the body out (lambda_N > 0 in its contact mode), or the body still creeps in
+  (``r < 0``) and nothing pulls it away (lambda_N >= 0), it stays on the wall: **contact**
+  (so a slow approach never tunnels).  Otherwise it is a **grazing** touch: reported, no
+  impact map, and the free flow, which leads away from the wall, continues.
 * **Accumulation (Zeno)**: after an impact whose rebound rate is below ``zeno_factor tol_v``
   while the wall would have to push (lambda_N > 0), the impacts accumulate.  The
   accumulation time is estimated from the geometric decay of the last flight times,
@@ -148,15 +150,18 @@ class _Run:
             raise _Stop("max_events", f"stopped after {len(self.events)} events at t = {self.t!r}")
 
     def needs_push(self, wall: int, y: np.ndarray) -> bool:
-        """Whether the wall would have to push to keep the body out of it (lambda_N > 0 of
-        the contact mode at the state with its normal velocity removed)."""
+        """Whether the wall would have to push to keep the body out of it (lambda_N > 0)."""
+        return self.normal_force(wall, y) > 0
+
+    def normal_force(self, wall: int, y: np.ndarray) -> float:
+        """lambda_N of the wall's contact mode at the state with its normal velocity
+        removed; for a moving wall (no contact mode) minus the second derivative of psi
+        along the free flow, which has the same sign."""
         if self.f.moving[wall]:
-            # no contact mode: the body presses on the wall if its free acceleration does
-            # not lead away (second derivative of psi along the flow at r = 0)
-            return self._free_psi_acceleration(wall, y) < 0
+            return -self._free_psi_acceleration(wall, y)
         q = self.q(y)
         v = self.f.project(wall, self.t, q, self.v(y))
-        return self.f.normal_force(wall, self.t, q, v) > 0
+        return self.f.normal_force(wall, self.t, q, v)
 
     def _free_psi_acceleration(self, wall: int, y: np.ndarray) -> float:
         h = 1e-6 * max(1.0, abs(self.t))
@@ -265,7 +270,10 @@ class _Run:
         rate = self.f.normal_rate(wall, self.t, y)
         tol_v = self.tol_v(y)
         if rate >= -tol_v:
-            if self.needs_push(wall, y):
+            # reached tangentially: a resting contact if the wall must (or may) hold the
+            # body while it still creeps in (lambda_N >= 0), else a grazing touch
+            force = self.normal_force(wall, y)
+            if force > 0 or (rate < 0 and force >= 0):
                 self.enter_contact(wall, rate, reason="grazing contact with the wall pressing")
             else:
                 self.event("grazing", wall, y, y, rate)
