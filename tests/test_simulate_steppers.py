@@ -481,6 +481,24 @@ def test_adaptive_driver_reaches_tolerance_on_kepler(name, rtol):
     assert accepted < {"dop853": 100, "tsit5": 500, "rk45": 500, "rodas4": 1000}[name]
 
 
+@pytest.mark.parametrize(("name", "method"), [("dop853", "DOP853"), ("rk45", "RK45")])
+def test_same_algorithm_as_scipy_step_for_step(name, method):
+    """dop853 and rk45 with initial_step and the default Controller are SciPy's DOP853 and
+    RK45 (same tables, error norms, first step and step rule), so one Kepler period takes
+    the same right-hand-side calls and ends on the same state to rounding."""
+    from scipy.integrate import solve_ivp
+
+    for rtol in (1e-5, 1e-9):
+        y0 = _kepler_exact(0.0)
+        y, accepted, _, nfev = _drive(
+            stepper(name), _kepler, None, y0, 2 * math.pi, rtol, rtol * 1e-2
+        )
+        sol = solve_ivp(_kepler, (0, 2 * math.pi), y0, method=method, rtol=rtol, atol=rtol * 1e-2)
+        assert sol.nfev == nfev + 2  # SciPy also counts f(t0, y0) and initial_step's call
+        assert sol.t.size - 1 == accepted
+        assert np.allclose(y, sol.y[:, -1], rtol=1e-11, atol=1e-12)  # summation order
+
+
 LAM = -1e6
 
 
