@@ -383,8 +383,12 @@ def test_non_positive_definite_metric_and_nan_raise_numerical_errors(target):
     )
     mod = codegen.generate(scene, target, strategy="linear_solve").load()
     assert np.isfinite(mod.acceleration([0, 0], [1, 1], [0.5])).all()
+    # a < 0 breaks the declaration: the call is refused once, naming the parameter
+    with pytest.raises(codegen.NumericalError, match="'a' = -0.9 breaks 0 < a"):
+        mod.acceleration([0, 0], [1, 1], [-0.9])
+    # and the generated code itself (called without the wrapper's parameter check)
     with pytest.raises(codegen.NumericalError, match="positive definite"):
-        mod.acceleration([0, 0], [1, 1], [-0.9])  # det g = 2a + 1 < 0
+        mod._raw["acceleration"]((np.zeros(2), np.ones(2)), np.array([-0.9]), None, None)
     states = np.zeros((4, 2))
     with pytest.raises(codegen.NumericalError, match="not finite"):
         mod.energy(states, np.array([[1, 1], [1, 1], [np.nan, 1], [1, 1]]), [0.5])

@@ -259,7 +259,12 @@ CODE = {
     "n",
     "m",
     "n_inputs",
+    "n_parameters",
     "stride",
+    "rules",  # only its length is printed raw; rule.text goes through a filter
+    "rule.index",
+    "rule.c_condition",
+    "rule.numpy_condition",
     "fn",  # passed whole to a macro, whose own outputs are checked here too
     "strategy",
     "prefix",

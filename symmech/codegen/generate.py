@@ -18,10 +18,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import sympy as sp
+
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
 from symmech.codegen.escape import file_name
 from symmech.codegen.lower import LoweredFunction, Names, lower
 from symmech.codegen.plan import CodegenError, ScenePlan, build_plan
+from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
 
 if TYPE_CHECKING:
     from symmech.codegen.module import SceneModule
@@ -54,6 +57,9 @@ class GeneratedCode:
     plan: ScenePlan
     functions: tuple[LoweredFunction, ...]
     omitted: tuple[str, ...] = field(default=())
+    #: What each run-time parameter must satisfy (checked once per call, see
+    #: :mod:`symmech.codegen.runtime_checks`), by index.
+    parameter_rules: tuple[ParameterRule, ...] = field(default=())
 
     def write(self, folder: str | Path) -> list[Path]:
         """Write every file into ``folder`` (created if needed); returns the paths."""
@@ -113,6 +119,7 @@ def generate(
         definitions=definitions,
         projectors=projectors,
     )
+    rules = _parameter_rules(scene, plan)
     names = Names.of(plan)
     done: dict[str, LoweredFunction] = {}
     for f in plan.functions:
@@ -143,6 +150,15 @@ def generate(
         "uses_parameters": any(f.takes_parameters for f in lowered),
         "uses_inputs": any(f.takes_inputs for f in lowered),
         "omitted": list(omitted),
+        "rules": [
+            {
+                "index": r.index,
+                "c_condition": r.c_condition(f"p[{r.index}]"),
+                "numpy_condition": r.numpy_condition(f"p[..., {r.index}]"),
+                "text": f"{r.text} ({r.why})" if r.why else r.text,
+            }
+            for r in rules
+        ],
         "functions": list(lowered),
         "callees": {f.name: f for f in lowered},
         "steps": steps,
@@ -167,7 +183,24 @@ def generate(
         plan=plan,
         functions=lowered,
         omitted=omitted,
+        parameter_rules=rules,
     )
+
+
+def _parameter_rules(scene: Scene, plan: ScenePlan) -> tuple[ParameterRule, ...]:
+    """The run-time parameters' rules (:func:`~symmech.codegen.runtime_checks.parameter_rules`);
+    a restitution baked in as a constant must lie in [0, 1] (a :class:`CodegenError`)."""
+    restitutions: dict = {}
+    for w in scene.walls:
+        if isinstance(w.restitution, sp.Symbol):
+            restitutions.setdefault(w.restitution, []).append(w.name)
+    for symbol, value in plan.constants:
+        if symbol in restitutions and not (0 <= value <= 1):
+            raise CodegenError(
+                f"constants: {symbol} = {value} is the restitution of wall"
+                f" {', '.join(map(repr, restitutions[symbol]))}: it must lie in [0, 1]"
+            )
+    return parameter_rules(plan.parameters, restitutions)
 
 
 def _argument_notes(plan: ScenePlan, lowered: Sequence[LoweredFunction]) -> list[str]:

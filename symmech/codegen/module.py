@@ -38,10 +38,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+import sympy as sp
 
 from symmech.codegen.build import DEFAULT_FLAGS, cache_dir, compile_library, load_library
 from symmech.codegen.lower import LoweredFunction
 from symmech.codegen.plan import CodegenError
+from symmech.codegen.runtime_checks import ParameterRule, check_parameters, real_array
 from symmech.errors import SymmechError
 
 if TYPE_CHECKING:
@@ -89,6 +91,7 @@ class SceneModule:
         self.fast_path = "general path"
         self._spec = {f.name: f for f in code.functions}
         self._by_wall = {(f.kind, f.wall_index): f.name for f in code.functions if f.wall}
+        self._rules: tuple[ParameterRule, ...] = code.parameter_rules
 
     @property
     def functions(self) -> tuple[str, ...]:
@@ -103,11 +106,16 @@ class SceneModule:
 
     # -- argument handling ----------------------------------------------------------------
     def _params(self, params: object, needed: bool = True) -> np.ndarray | None:
+        """The parameter array (k,) or (..., k) as float64, checked once against the
+        declaration's rules (:mod:`symmech.codegen.runtime_checks`)."""
         k = len(self.parameters)
         if not needed and params is None:
             return None
         if k == 0:
-            if params is not None and len(np.atleast_1d(params)) != 0:
+            given = params is not None and (
+                len(params) if isinstance(params, Mapping) else real_array(params, "params").size
+            )
+            if given:
                 raise CodegenError(
                     f"scene {self.code.scene_name!r} has no run-time parameters; got {params!r}"
                 )
@@ -115,23 +123,40 @@ class SceneModule:
         if params is None:
             raise CodegenError(f"params required: {list(self.parameters)}")
         if isinstance(params, Mapping):
-            values = {str(key): val for key, val in params.items()}
+            values: dict[str, object] = {}
+            for key, val in params.items():
+                name = key.name if isinstance(key, sp.Symbol) else key
+                if not isinstance(name, str):
+                    raise CodegenError(f"params: key {key!r} is not a parameter name")
+                if name in values:
+                    raise CodegenError(f"params: {name!r} is given twice")
+                values[name] = val
             missing = [p for p in self.parameters if p not in values]
             extra = sorted(set(values) - set(self.parameters))
             if missing or extra:
                 raise CodegenError(
                     f"params: missing {missing}, unknown {extra}; expected {list(self.parameters)}"
                 )
-            params = [values[p] for p in self.parameters]
-        p = np.ascontiguousarray(params, dtype=np.float64)
+            columns = [real_array(values[p], f"params[{p!r}]") for p in self.parameters]
+            try:
+                columns = list(np.broadcast_arrays(*columns))
+            except ValueError:
+                shapes = {p: c.shape for p, c in zip(self.parameters, columns, strict=True)}
+                raise CodegenError(
+                    f"params: the values' shapes do not broadcast: {shapes}"
+                ) from None
+            p = np.stack(columns, axis=-1)
+        else:
+            p = real_array(params, "params")
         if p.shape[-1:] != (k,):
             raise CodegenError(
                 f"params: expected {k} values {list(self.parameters)}, got shape {p.shape}"
             )
-        return p
+        check_parameters(self._rules, p, NumericalError, "params")
+        return np.ascontiguousarray(p)
 
     def _state(self, value: object, size: int, what: str) -> np.ndarray:
-        a = np.asarray(value, dtype=np.float64)
+        a = real_array(value, what)
         if a.ndim == 0 or a.shape[-1] != size:
             raise CodegenError(f"{what}: expected shape (..., {size}), got {a.shape}")
         return a
@@ -147,12 +172,24 @@ class SceneModule:
         p = self._params(params, spec.takes_parameters)
         if spec.takes_time and t is None:
             raise CodegenError(f"{name} depends on time: pass t=")
-        u = None
-        if spec.takes_inputs:
-            if inputs is None:
-                raise CodegenError(f"{name} needs the inputs u = {list(self.inputs)}: pass inputs=")
-            u = self._state(inputs, len(self.inputs), "inputs")
-        tt = None if t is None or not spec.takes_time else np.asarray(t, dtype=np.float64)
+        if spec.takes_inputs and inputs is None:
+            raise CodegenError(f"{name} needs the inputs u = {list(self.inputs)}: pass inputs=")
+        # t and the inputs are checked when given, even to a function that does not read them
+        u = None if inputs is None else self._state(inputs, len(self.inputs), "inputs")
+        tt = None if t is None else real_array(t, "t")
+        u = u if spec.takes_inputs else None
+        tt = tt if spec.takes_time else None
+        leads = {f"argument {arg}": a.shape[:-1] for arg, a in zip(spec.state, state, strict=True)}
+        if p is not None:
+            leads["params"] = p.shape[:-1]
+        if tt is not None:
+            leads["t"] = tt.shape
+        if u is not None:
+            leads["inputs"] = u.shape[:-1]
+        try:
+            np.broadcast_shapes(*leads.values())
+        except ValueError:
+            raise CodegenError(f"{name}: the batch shapes do not broadcast: {leads}") from None
         return self._raw[name](tuple(state), p, tt, u)
 
     # -- the API ----------------------------------------------------------------------------
@@ -165,8 +202,9 @@ class SceneModule:
                 return out
         spec = self._spec.get(name)
         sizes = [2 * self.n if s == "y" else self.n for s in (spec.state if spec else ())]
+        labels = spec.state if spec else ()
         arrays = [
-            self._state(a, k, f"{name} argument {i}")
+            self._state(a, k, f"{name} argument {labels[i] if i < len(labels) else i}")
             for i, (a, k) in enumerate(zip(state, sizes, strict=False))
         ]
         if spec is not None and len(arrays) != len(spec.state):
@@ -216,8 +254,9 @@ class SceneModule:
             if len(hits) > 1:
                 raise CodegenError(f"walls {hits} are all named {wall!r}; pass the index")
             return hits[0]
-        if isinstance(wall, bool) or not isinstance(wall, int):
+        if isinstance(wall, bool | np.bool_) or not isinstance(wall, int | np.integer):
             raise CodegenError(f"wall must be an index or a name, got {wall!r}")
+        wall = int(wall)
         if not -len(self.walls) <= wall < len(self.walls):
             raise CodegenError(f"wall index {wall} out of range: {len(self.walls)} walls")
         return wall % len(self.walls)
@@ -295,7 +334,13 @@ def _numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
 
 
 def _c_raw(
-    lib: ctypes.CDLL, prefix: str, spec: LoweredFunction, n: int, n_inputs: int, n_parameters: int
+    lib: ctypes.CDLL,
+    prefix: str,
+    spec: LoweredFunction,
+    n: int,
+    n_inputs: int,
+    n_parameters: int,
+    rules: Sequence[ParameterRule] = (),
 ) -> tuple[Raw, Fast | None]:
     """The general caller of a generated C function, and (for a function of the state and
     the parameters only) a fast single-state caller.
@@ -332,6 +377,10 @@ def _c_raw(
     out_size = spec.out_size
     sizes = [2 * n if s == "y" else n for s in spec.state]
     local = threading.local()
+
+    def parameters_hold(p: np.ndarray) -> bool:
+        """Whether one parameter vector is finite and within its declared ranges."""
+        return all(bool(np.isfinite(p[r.index])) and bool(r.holds(p[r.index])) for r in rules)
 
     def fast_buffers() -> tuple[list[np.ndarray], list[int]]:
         """Per-thread buffers of the fast path, in the order of the function's arguments."""
@@ -381,10 +430,16 @@ def _c_raw(
             checks.append((n_parameters, (n_parameters,)))
         sequences = (list, tuple)
         ndarray = np.ndarray
-        dtypes = "dl"
+        dtypes = "dl"  # float64, int64 (any byte order: the copy into a buffer converts)
+        plain = (float, int)
 
         def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
-            args = (*state, params) if spec.takes_parameters else state
+            if spec.takes_parameters:
+                args = (*state, params)
+            elif params is not None:
+                return None  # the general path checks the parameters it is given
+            else:
+                args = state
             if len(args) != len(checks):
                 return None
             for a, (k, shape) in zip(args, checks, strict=True):
@@ -394,6 +449,8 @@ def _c_raw(
                         return None
                 elif kind not in sequences or len(a) != k:  # type: ignore[arg-type]
                     return None
+                elif not all(type(x) in plain for x in a):  # type: ignore[attr-defined]
+                    return None  # bool, str, complex...: the general path refuses them
             try:
                 arrays, addresses = local.fast
             except AttributeError:
@@ -401,8 +458,10 @@ def _c_raw(
             try:
                 for buffer, a in zip(arrays, args, strict=False):
                     buffer[:] = a
-            except (TypeError, ValueError):
-                return None  # e.g. nested lists: the general path explains
+            except OverflowError:
+                return None  # an int beyond float64: the general path explains
+            if spec.takes_parameters and not parameters_hold(arrays[len(sizes)]):
+                return None  # the general path names the parameter
             status = single(*addresses)
             if status:
                 raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
@@ -440,7 +499,9 @@ def _c_raw(
             keep.append(tt)
             args.append(tt.ctypes.data)
         if spec.takes_inputs:
-            uu = np.ascontiguousarray(np.broadcast_to(u, (*lead, n_inputs)).reshape(count, -1))
+            uu = np.ascontiguousarray(
+                np.broadcast_to(u, (*lead, n_inputs)).reshape(count, n_inputs)
+            )
             keep.append(uu)
             args.append(uu.ctypes.data)
         out = np.empty((count, out_size))
@@ -503,6 +564,7 @@ def extension_source(code: GeneratedCode, module: str) -> str:
             scene=code.scene_name,
             source=f"{code.stem}.c",
             module=module,
+            n_parameters=k,
             header=f"{code.stem}.h",
             prefix=f"{code.stem}_",
             functions=[
@@ -607,7 +669,10 @@ def load_generated(
     prefix = f"{code.stem}_"
     n_inputs = len(code.plan.inputs)
     n_par = len(code.plan.parameters)
-    callers = {f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs, n_par) for f in code.functions}
+    rules = code.parameter_rules
+    callers = {
+        f.name: _c_raw(lib, prefix, f, code.plan.n, n_inputs, n_par, rules) for f in code.functions
+    }
     raw = {name: general for name, (general, _) in callers.items()}
     fast = {name: quick for name, (_, quick) in callers.items() if quick is not None}
     how = "ctypes (extension=False)"

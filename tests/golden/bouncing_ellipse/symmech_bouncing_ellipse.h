@@ -45,6 +45,10 @@ extern "C" {
 #define SYMMECH_BOUNCING_ELLIPSE_N_PARAMETERS 4
 #define SYMMECH_BOUNCING_ELLIPSE_N_INPUTS 0
 
+/* 0, or 1 + the index of the first parameter that is not finite or outside the range its
+   declaration gives (its sign; a restitution in [0, 1]): call once per parameter vector. */
+int symmech_bouncing_ellipse_check_parameters(const double *p);
+
 int symmech_bouncing_ellipse_mass_matrix(const double *q, const double *p, double *out);
 long symmech_bouncing_ellipse_mass_matrix_batch(long count, const double *q, const double *p, double *out);
 int symmech_bouncing_ellipse_forcing(const double *q, const double *v, double *out);

@@ -45,6 +45,10 @@ extern "C" {
 #define SYMMECH_CARNOT_3_7_N_PARAMETERS 4
 #define SYMMECH_CARNOT_3_7_N_INPUTS 0
 
+/* 0, or 1 + the index of the first parameter that is not finite or outside the range its
+   declaration gives (its sign; a restitution in [0, 1]): call once per parameter vector. */
+int symmech_carnot_3_7_check_parameters(const double *p);
+
 int symmech_carnot_3_7_mass_matrix(const double *q, const double *p, double *out);
 long symmech_carnot_3_7_mass_matrix_batch(long count, const double *q, const double *p, double *out);
 int symmech_carnot_3_7_forcing(const double *q, const double *v, double *out);

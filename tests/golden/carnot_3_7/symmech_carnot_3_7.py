@@ -38,6 +38,26 @@ def _batch_shape(*parts):
     return numpy.broadcast_shapes(*shapes)
 
 
+def check_parameters(p):
+    """0, or 1 + the index of the first parameter that is not finite or outside the range
+    its declaration gives, for every parameter vector of p (shape (..., 4)):
+      p[0]: 0 < R (declared positive)
+      p[1]: 0 <= alpha <= 1 (declared nonnegative; the restitution of wall 'rough_wall')
+      p[2]: 0 < k (declared positive)
+      p[3]: 0 < m (declared positive)
+    """
+    p = numpy.asarray(p, dtype=numpy.float64)
+    if not numpy.all(numpy.isfinite(p[..., 0]) & (p[..., 0] > 0.0)):
+        return 1
+    if not numpy.all(numpy.isfinite(p[..., 1]) & (p[..., 1] >= 0.0) & (p[..., 1] <= 1.0)):
+        return 2
+    if not numpy.all(numpy.isfinite(p[..., 2]) & (p[..., 2] > 0.0)):
+        return 3
+    if not numpy.all(numpy.isfinite(p[..., 3]) & (p[..., 3] > 0.0)):
+        return 4
+    return 0
+
+
 def mass_matrix(q, p):
     """kinetic metric g(q) in the velocity basis.
 

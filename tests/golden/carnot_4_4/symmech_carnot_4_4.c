@@ -14,6 +14,22 @@ static int sm_check_finite(int size, const double *x)
     }
     return SYMMECH_OK;
 }
+
+/*
+ * Run-time parameter checks, once per parameter vector (the functions below do not
+ * check): 0, or 1 + the index of the first parameter that is not finite or breaks
+ * the rule its declaration gives:
+ *   p[0]: 0 <= alpha <= 1 (declared nonnegative; the restitution of wall 'rough_wall')
+ *   p[1]: 0 < k (declared positive)
+ *   p[2]: 0 < r (declared positive)
+ */
+int symmech_carnot_4_4_check_parameters(const double *p)
+{
+    if (!(p[0] >= 0.0 && p[0] <= 1.0 && isfinite(p[0]))) return 1;
+    if (!(p[1] > 0.0 && isfinite(p[1]))) return 2;
+    if (!(p[2] > 0.0 && isfinite(p[2]))) return 3;
+    return SYMMECH_OK;
+}
 /*
  * mass_matrix: kinetic metric g(q) in the velocity basis
  *   T = 1/2 v^T g v

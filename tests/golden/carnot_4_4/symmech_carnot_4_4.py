@@ -37,6 +37,23 @@ def _batch_shape(*parts):
     return numpy.broadcast_shapes(*shapes)
 
 
+def check_parameters(p):
+    """0, or 1 + the index of the first parameter that is not finite or outside the range
+    its declaration gives, for every parameter vector of p (shape (..., 3)):
+      p[0]: 0 <= alpha <= 1 (declared nonnegative; the restitution of wall 'rough_wall')
+      p[1]: 0 < k (declared positive)
+      p[2]: 0 < r (declared positive)
+    """
+    p = numpy.asarray(p, dtype=numpy.float64)
+    if not numpy.all(numpy.isfinite(p[..., 0]) & (p[..., 0] >= 0.0) & (p[..., 0] <= 1.0)):
+        return 1
+    if not numpy.all(numpy.isfinite(p[..., 1]) & (p[..., 1] > 0.0)):
+        return 2
+    if not numpy.all(numpy.isfinite(p[..., 2]) & (p[..., 2] > 0.0)):
+        return 3
+    return 0
+
+
 # The linear-algebra steps (Cholesky factorisations and solves) are unrolled into each
 # function at generation time (symmech/codegen/unroll.py): straight-line code, the same
 # operations in the same order as the C code.
