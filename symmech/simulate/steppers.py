@@ -121,8 +121,9 @@ def check_tolerances(rtol: float, atol, n: int) -> tuple[float, np.ndarray | flo
     """Validate ``rtol`` and ``atol`` for a state of size ``n``.
 
     ``rtol`` must lie in ``[100 eps, 1)`` (below it no float64 method can follow it) and
-    ``atol`` be a non-negative scalar or an array of shape ``(n,)``, not all zero where
-    ``rtol`` is.  Returns them as a float and a float or float array.
+    ``atol`` a finite non-negative scalar or array of shape ``(n,)``.  Returns them as a
+    float and a float or float array.  Steppers do not repeat this check on every step:
+    the caller validates once.
     """
     try:
         rtol_ = float(rtol)
@@ -161,7 +162,13 @@ class Stepper(ABC):
         atol: float | np.ndarray,
         jac: Jac | None = None,
     ) -> Step:
-        """One step from ``(t0, y0)`` (with ``f0 = f(t0, y0)``) to ``t0 + h``."""
+        """One step from ``(t0, y0)`` (with ``f0 = f(t0, y0)``) to ``t0 + h``.
+
+        ``f(t, y)`` must return an array of ``y``'s shape (:class:`StepperError`
+        otherwise), ``jac(t, y)`` the ``(n, n)`` matrix ``df/dy`` (implicit methods only);
+        ``h`` finite and non-zero, negative to integrate backwards.  ``rtol`` and ``atol``
+        are used as given (see :func:`check_tolerances`).
+        """
 
     def __repr__(self) -> str:
         return f"<stepper {self.name}: order {self.order}>"
