@@ -32,7 +32,20 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["TABLEAUX", "ExplicitTableau", "RosenbrockTableau", "exact", "floats"]
+__all__ = [
+    "DOP853",
+    "DOP853_EXTRAS",
+    "RK4",
+    "RK45",
+    "RODAS4",
+    "TABLEAUX",
+    "TSIT5",
+    "Dop853Extras",
+    "ExplicitTableau",
+    "RosenbrockTableau",
+    "exact",
+    "floats",
+]
 
 Row = tuple[Fraction, ...]
 Matrix = tuple[Row, ...]
