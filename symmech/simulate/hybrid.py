@@ -53,7 +53,6 @@ from symmech.simulate.result import Event, SimulationResult
 
 __all__ = ["Options", "run"]
 
-EPS = float(np.finfo(float).eps)
 
 
 @dataclass(frozen=True)
@@ -93,7 +92,7 @@ class _Run:
         self.walls = fns.walls
         self.names = fns.wall_names
         self.t = t0
-        self.y = np.array(y0, dtype=float)
+        self.y = fns.array(y0)
         self.ts: list[float] = [t0]
         self.ys: list[np.ndarray] = [self.y.copy()]
         self.segments: list[tuple[float, float, Any]] = []
@@ -122,11 +121,11 @@ class _Run:
         return y[self.n :]
 
     def tol_v(self, y: np.ndarray) -> float:
-        return self.o.atol + self.o.rtol * float(np.max(np.abs(self.v(y)), initial=0.0))
+        return self.o.atol + self.o.rtol * max((abs(x) for x in self.v(y)), default=0)
 
     def record(self, t: float, y: np.ndarray) -> None:
         self.ts.append(t)
-        self.ys.append(np.array(y, dtype=float))
+        self.ys.append(self.f.array(y))
 
     def event(self, kind: str, wall: int, y_minus: np.ndarray, y_plus: np.ndarray, rate: float):
         q = self.q(y_minus)
@@ -147,7 +146,7 @@ class _Run:
             )
         )
         if len(self.events) >= self.o.max_events:
-            raise _Stop("max_events", f"stopped after {len(self.events)} events at t = {self.t!r}")
+            raise _Stop("max_events", f"stopped after {len(self.events)} events at t = {float(self.t)!r}")
 
     def needs_push(self, wall: int, y: np.ndarray) -> bool:
         """Whether the wall would have to push to keep the body out of it (lambda_N > 0)."""
@@ -204,6 +203,10 @@ class _Run:
                 return self.f.normal_rate(funcs[i][0], t0, seg.y0)
             return value(i, t0, seg.y0)
 
+        self._event_values = [
+            (lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))
+        ]
+
         def crossed(i: int, a: float, b: float) -> bool:
             return (a > 0 >= b) if funcs[i][1] == "release" else (a >= 0 > b)
 
@@ -240,11 +243,33 @@ class _Run:
                     if ghi == 0:  # a contact force reaching exactly zero at the sample
                         a = hi
                     else:
-                        a = find_root(g, lo, hi, glo, ghi, EPS)[0]
+                        a = self.polish(seg, i, *find_root(g, lo, hi, glo, ghi, self.f.eps))
                     if best is None or a < best[0]:
                         best = (a, state(a), *funcs[i])
                 return best
         return None
+
+    def polish(self, seg: Segment, i: int, a: Any, b: Any, ga: Any, gb: Any) -> Any:
+        """The event time found on the step's continuous output; where the step can
+        recompute its state to full order at any time (``seg.refine``, the mpmath
+        reference), the root of the gap is polished on that by the secant method, keeping
+        the admissible side."""
+        refine = getattr(seg, "refine", None)
+        if refine is None:
+            return a
+        g = self._event_values[i]
+        fa = g(a, refine(a))
+        fb = g(b, refine(b))
+        for _ in range(8):
+            if fa == fb:
+                break
+            c = b - fb * (b - a) / (fb - fa)
+            fc = g(c, refine(c))
+            a, fa, b, fb = b, fb, c, fc
+            if abs(b - a) <= 4 * self.f.eps * max(abs(b), 1):
+                break
+        lo = min(a, b)
+        return lo if g(lo, refine(lo)) >= 0 else lo - 4 * self.f.eps * max(abs(lo), 1)
 
     @staticmethod
     def _dip(ts: list[float], gs: list[float]) -> float | None:
@@ -302,7 +327,7 @@ class _Run:
         else:
             raise _Stop(
                 "failed",
-                f"simultaneous impacts at t = {self.t!r} did not resolve in"
+                f"simultaneous impacts at t = {float(self.t)!r} did not resolve in"
                 f" {100 * self.walls} applications of the sequential rule",
             )
         for w in dict.fromkeys(hit):
@@ -344,17 +369,17 @@ class _Run:
             )
             raise _Stop(
                 "zeno",
-                f"impacts on wall {self.names[wall]!r} accumulate at t* = {estimate!r}"
-                f" (last impact at t = {self.t!r}, rebound speed {rebound:.3g}); stopped: {why}",
+                f"impacts on wall {self.names[wall]!r} accumulate at t* = {float(estimate)!r}"
+                f" (last impact at t = {float(self.t)!r}, rebound speed {float(rebound):.3g}); stopped: {why}",
                 estimate,
             )
-        self.enter_contact(wall, rebound, reason=f"accumulation of impacts (t* ~ {estimate!r})")
+        self.enter_contact(wall, rebound, reason=f"accumulation of impacts (t* ~ {float(estimate)!r})")
 
     def enter_contact(self, wall: int, rate: float, reason: str) -> None:
         if self.f.moving[wall] or self.o.contact == "stop" or self.mode is not None:
             raise _Stop(
                 "zeno",
-                f"the body comes to rest on wall {self.names[wall]!r} at t = {self.t!r}"
+                f"the body comes to rest on wall {self.names[wall]!r} at t = {float(self.t)!r}"
                 f" ({reason}); stopped: "
                 + (
                     "contact=stop"
@@ -379,7 +404,7 @@ class _Run:
             for _ in range(2):
                 psi = self.f.psi(mode, self.t, q)
                 g = self.f.gradient(mode, self.t, q)
-                gg = float(g @ g)
+                gg = sum(gi * gi for gi in g)
                 if gg == 0:
                     break
                 q = q - psi * g / gg
@@ -423,7 +448,7 @@ class _Run:
                     continue
                 t_e, y_e, wall, what = ev
                 self.segments.append((seg.t0, t_e, seg.dense))
-                self.t, self.y = t_e, np.array(y_e, dtype=float)
+                self.t, self.y = t_e, self.f.array(y_e)
                 self.record(self.t, self.y)
                 if what == "release":
                     self.event("release", wall, self.y, self.y, 0.0)
@@ -436,7 +461,7 @@ class _Run:
             return stop.status, stop.message, stop.accumulation
         except FlowFailure as exc:
             return "failed", str(exc), None
-        return "finished", f"reached t_end = {t_end!r}", None
+        return "finished", f"reached t_end = {float(t_end)!r}", None
 
     def track_energy(self) -> None:
         if self.f.energy_conserved:

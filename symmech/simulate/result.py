@@ -51,8 +51,9 @@ class Event:
 
     def __repr__(self) -> str:
         return (
-            f"Event({self.kind} at t={self.time:.17g} on {self.wall_name!r},"
-            f" normal speed {self.normal_speed:.3g}, dE={self.energy_change:.3g})"
+            f"Event({self.kind} at t={float(self.time)!r} on {self.wall_name!r},"
+            f" normal speed {float(self.normal_speed):.3g},"
+            f" dE={float(self.energy_change):.3g})"
         )
 
 
@@ -116,6 +117,6 @@ class SimulationResult:
 
     def __repr__(self) -> str:
         return (
-            f"SimulationResult(status={self.status!r}, t_end={self.t[-1]:.6g},"
+            f"SimulationResult(status={self.status!r}, t_end={float(self.t[-1]):.6g},"
             f" steps={len(self.t)}, events={len(self.events)}, message={self.message!r})"
         )

@@ -231,7 +231,15 @@ class HybridSystem:
 class Functions:
     """The evaluations the hybrid loop makes, over a :class:`HybridSystem` at fixed
     parameters, in float64.  ``mode`` is ``None`` (free flight) or the index of the wall in
-    contact.  Every method takes and returns NumPy arrays of float64 (scalars as floats)."""
+    contact.  Every method takes and returns NumPy arrays of float64 (scalars as floats).
+    (:class:`symmech.simulate.reference.MpFunctions` is the same interface in mpmath.)"""
+
+    #: The arithmetic's unit roundoff, and its array constructor.
+    eps = float(np.finfo(float).eps)
+
+    @staticmethod
+    def array(y: Any) -> np.ndarray:
+        return np.array(y, dtype=float)
 
     def __init__(self, system: HybridSystem, params: Mapping[str, float]):
         self.system = system
