@@ -1,0 +1,529 @@
+"""The hybrid loop in generated C (``backend="c"``): emit, compile, load and run it.
+
+The simulator template ``c/simulator.c.jinja`` is the loop of :mod:`.hybrid` in C: same
+flow (:class:`~.flow.RKFlow` over :class:`~.flow.AugmentedFlow`, the walls' gaps in the
+state), same event search (samples of the dense output, the divided gap, the parabola dip
+check, Anderson-Bjorck location), same impact, accumulation, contact and release rules,
+same statistics.  The template holds the algorithm; this module prints what depends on
+the scene into a small frozen :class:`SimulatorSpec`: the call of every generated function
+by its C name with the arguments it takes, the locked contacts' normal force
+``lambda_N`` from the statics ``A^T lambda = -f(q, 0)`` (printed by symmech's C printer),
+the Butcher tableaux as exact doubles (``repr`` of a float reads back to the same double).
+
+The generated C of the free flight and of every static wall's contact mode
+(:class:`~.system.HybridSystem`) is compiled with the simulator into one shared library,
+cached by content (:func:`symmech.codegen.build.compile_library`) and, once loaded, on the
+system object.  A scene generated for its equations alone (:func:`symmech.codegen.generate`)
+gets no simulator code: only this module renders the template.
+
+A run allocates its work arrays once (``new``) and writes its accepted steps, Hermite
+segments and events into buffers given by the caller; when they run short the C loop
+pauses at the top of an iteration and :func:`run_c` continues it into fresh ones, so a
+run's length is bounded by memory only.  The continuous output of the C backend is the
+cubic Hermite interpolant through each step's ends and their derivatives.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import time as _time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from symmech.codegen.backends import environment, templates_used
+from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
+from symmech.codegen.printers import SymmechCPrinter
+from symmech.declaration.symbols import t as TIME
+from symmech.simulate.hybrid import Options
+from symmech.simulate.result import EVENT_KINDS, STATUSES, Event, SimulationResult
+from symmech.simulate.steppers import c_tableau, stepper
+from symmech.simulate.system import Functions, HybridSystem, SimulationError, contact_rows
+
+__all__ = ["C_METHODS", "CLibrary", "SimulatorSpec", "library", "run_c", "simulator_source"]
+
+#: Methods of the C loop, in the order of the template's tableaux.
+C_METHODS = ("dop853", "tsit5", "rk45", "rk4")
+
+#: Entries of a run's info row before the state (see the template's ``info``).
+INFO_HEAD = 22
+# statuses and reasons of the template (enum ST_*, R_*)
+_STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed"}
+_R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL = range(1, 10)
+_FUNCTIONS = ("psi", "dpsi", "psi_t", "impact", "energy", "projector_P", "constraint_residual")
+_FUNCTIONS += ("multipliers",)
+_WALL_KINDS = ("psi", "dpsi", "psi_t", "impact")
+_TEMPLATE = "c/simulator.c.jinja"
+
+
+@dataclass(frozen=True)
+class SimulatorSpec:
+    """What the simulator template prints for one scene: sizes, flags and the call lines
+    (``calls``: rhs, wall, energy, projector, residual, force), all already printed."""
+
+    scene: str
+    prefix: str
+    headers: tuple[str, ...]
+    n: int
+    walls: int
+    constrained: int
+    energy_conserved: int
+    moving: tuple[int, ...]
+    locked: tuple[int, ...]
+    normal_index: int
+    calls: dict[str, Any]
+    parameter_layout: tuple[tuple[str, ...], ...]
+
+    @property
+    def info_size(self) -> int:
+        return INFO_HEAD + 2 * self.n
+
+
+def _call(module: Any, name: str, args: dict[str, str], offset: int) -> str:
+    """The C call of generated function ``name`` of ``module`` with the arguments it takes."""
+    spec = {f.name: f for f in module.code.functions}[name]
+    out = []
+    for a in spec.arguments:
+        if a == "p":
+            out.append(f"P + {offset}")
+        elif a == "u":
+            raise SimulationError(
+                f"{name} of scene {module.code.scene_name!r} reads inputs u: the C loop runs"
+                " scenes without arbitrary functions of time (give definitions=)"
+            )
+        else:
+            out.append(args[a])
+    out.append(args["out"])
+    return f"{module.code.stem}_{name}({', '.join(out)})"
+
+
+def _locked_force_lines(system: HybridSystem, wall: int, offset: int) -> list[str]:
+    """``lambda_N`` of a locked contact (entry ``m`` of ``lambda`` with ``A^T lambda =
+    -f(q, 0)``, A the contact rows; :meth:`HybridSystem.locked_force`) printed in C."""
+    scene = system.scene
+    decl = scene.declaration
+    A = sp.Matrix(contact_rows(scene, wall))
+    f0 = sp.Matrix(scene.forcing()).xreplace({v: 0 for v in decl.velocities})
+    expr = A.T.LUsolve(-f0)[decl.m]
+    temps, (body,) = sp.cse([expr], symbols=sp.numbered_symbols("lf"))
+    names: dict[sp.Symbol, str] = {TIME: "t"}
+    names.update({s: f"q[{i}]" for i, s in enumerate(decl.coordinates)})
+    names.update({s: f"P[{offset + j}]" for j, s in enumerate(scene.parameters)})
+    names.update({s: str(s) for s, _ in temps})
+    printer = SymmechCPrinter(names)
+    lines = ["{"]
+    lines += [f"    const double {s} = {printer.doprint(e)};" for s, e in temps]
+    lines += [f"    *out = {printer.doprint(body)};", "    return 0;", "}"]
+    return lines
+
+
+def simulator_spec(system: HybridSystem) -> SimulatorSpec:
+    """The :class:`SimulatorSpec` of ``system`` (every static wall's contact mode is
+    generated here)."""
+    scene = system.scene
+    free = system.free
+    walls = len(scene.walls)
+    fns = Functions(system, {str(p): 1.0 for p in scene.parameters})
+    moving = tuple(int(m) for m in fns.moving)
+    contacts: dict[int, Any] = {w: system.contact(w) for w in range(walls) if not moving[w]}
+    locked = tuple(int(w in contacts and contacts[w] is None) for w in range(walls))
+    layout: list[tuple[str, ...]] = [free.parameters]
+    offsets: dict[int | None, int] = {None: 0}
+    size = len(free.parameters)
+    for w, mod in contacts.items():
+        if mod is not None:
+            offsets[w] = size
+            layout.append(mod.parameters)
+            size += len(mod.parameters)
+    scene_offset = size
+    layout.append(tuple(str(p) for p in scene.parameters))
+    qv = {"q": "q", "v": "v", "y": "y", "t": "t"}
+    rhs = [(-1, _call(free, "rhs", {**qv, "out": "out"}, 0))]
+    projector, residual, force = [], [], []
+    if fns.constrained:
+        projector.append((-1, _call(free, "projector_P", {**qv, "out": "out"}, 0)))
+        r_out = {f.name: f.out_size for f in free.code.functions}["constraint_residual"]
+        residual.append((-1, r_out, _call(free, "constraint_residual", {**qv, "out": "out"}, 0)))
+    wall_calls = []
+    for w in range(walls):
+        for k, kind in enumerate(_WALL_KINDS):
+            if kind == "psi_t" and not moving[w]:
+                continue
+            name = free._wall_function(kind, w)
+            wall_calls.append((k * walls + w, _call(free, name, {**qv, "out": "out"}, 0)))
+        if moving[w]:
+            continue
+        mod = contacts[w]
+        if mod is None:
+            force.append((w, _locked_force_lines(system, w, scene_offset)))
+            continue
+        off = offsets[w]
+        rhs.append((w, _call(mod, "rhs", {**qv, "out": "out"}, off)))
+        projector.append((w, _call(mod, "projector_P", {**qv, "out": "out"}, off)))
+        sizes = {f.name: f.out_size for f in mod.code.functions}
+        line = _call(mod, "constraint_residual", {**qv, "out": "out"}, off)
+        residual.append((w, sizes["constraint_residual"], line))
+        call = _call(mod, "multipliers", {**qv, "out": "lam"}, off)
+        force.append(
+            (w, [f"{{ int st = {call}; *out = lam[{system.normal_index(w)}]; return st; }}"])
+        )
+    headers = [f"{free.code.stem}.h"] + [
+        f"{m.code.stem}.h" for m in contacts.values() if m is not None
+    ]
+    return SimulatorSpec(
+        scene=scene.name,
+        prefix=f"{free.code.stem}_sim_",
+        headers=tuple(headers),
+        n=scene.n,
+        walls=walls,
+        constrained=int(fns.constrained),
+        energy_conserved=int(fns.energy_conserved),
+        moving=moving,
+        locked=locked,
+        normal_index=system.normal_index(0) if walls else 0,
+        calls={
+            "rhs": rhs,
+            "wall": wall_calls,
+            "energy": _call(free, "energy", {**qv, "out": "out"}, 0),
+            "projector": projector,
+            "residual": residual,
+            "force": force,
+        },
+        parameter_layout=tuple(layout),
+    )
+
+
+def _tableaux() -> list[dict[str, Any]]:
+    """The methods' coefficients as C literals (``repr``: the same double read back)."""
+    out = []
+    for kind_name in C_METHODS:
+        tab = c_tableau(kind_name)
+        st = stepper(kind_name)
+        name = f"m_{kind_name}"
+        extra = [(k, [repr(v) for v in tab[k]]) for k in tab if k not in ("c", "a", "b")]
+        refs = [
+            f"{name}_{k}" if k in tab else "NULL"
+            for k in ("e", "e3", "dense", "c_extra", "a_extra", "d")
+        ]
+        out.append(
+            {
+                "name": name,
+                "stages": st.tableau.stages,
+                "error_order": st.error_order,
+                "adaptive": int(st.adaptive),
+                "kind": 0 if kind_name == "dop853" else 2 if kind_name == "rk4" else 1,
+                "c": [repr(v) for v in tab["c"]],
+                "a": [repr(v) for v in tab["a"]],
+                "b": [repr(v) for v in tab["b"]],
+                "extra": extra,
+                "refs": refs,
+            }
+        )
+    return out
+
+
+def simulator_source(system: HybridSystem) -> dict[str, str]:
+    """Every source file of the simulator library of ``system``: the generated modules'
+    ``.c``/``.h`` files and the rendered simulator (``<stem>_simulator.c``)."""
+    if system.target != "c":
+        raise SimulationError(
+            f"the C simulator needs a system built for target 'c', got {system.target!r}"
+        )
+    spec = simulator_spec(system)
+    from symmech import __version__
+
+    stamp = (
+        f"Generated by symmech {__version__} from template"
+        f" {', '.join(templates_used(_TEMPLATE))}; do not edit."
+    )
+    text = (
+        environment()
+        .get_template(_TEMPLATE)
+        .render(
+            stamp=stamp,
+            scene=spec.scene,
+            prefix=spec.prefix,
+            headers=spec.headers,
+            n=spec.n,
+            walls=spec.walls,
+            constrained=spec.constrained,
+            energy_conserved=spec.energy_conserved,
+            moving=spec.moving,
+            locked=spec.locked,
+            normal_index=spec.normal_index,
+            calls=spec.calls,
+            methods=C_METHODS,
+            tableaux=_tableaux(),
+            info_size=spec.info_size,
+        )
+    )
+    files: dict[str, str] = {}
+    for mod in system.modules.values():
+        if mod is not None:
+            files.update(mod.code.files)
+    files[f"{system.free.code.stem}_simulator.c"] = text
+    return files
+
+
+class CLibrary:
+    """The loaded simulator library of one :class:`HybridSystem` and its ctypes entry points."""
+
+    def __init__(self, system: HybridSystem, flags: tuple[str, ...] = DEFAULT_FLAGS):
+        self.spec = simulator_spec(system)
+        self.sources = simulator_source(system)
+        self.path = compile_library(self.sources, flags=flags)
+        lib = load_library(self.path)
+        p, vp = self.spec.prefix, ctypes.c_void_p
+        self.new = getattr(lib, p + "new")
+        self.new.argtypes = [ctypes.c_int, vp, vp, ctypes.c_int]
+        self.new.restype = vp
+        self.free = getattr(lib, p + "free")
+        self.free.argtypes = [vp]
+        self.free.restype = None
+        self.begin = getattr(lib, p + "begin")
+        self.begin.argtypes = [vp, ctypes.c_double, vp]
+        self.begin.restype = None
+        self.run = getattr(lib, p + "run")
+        self.run.argtypes = [vp, vp, ctypes.c_long, vp, ctypes.c_long, vp, vp, ctypes.c_long, vp]
+        self.run.restype = ctypes.c_int
+        self.info = getattr(lib, p + "info")
+        self.info.argtypes = [vp, vp]
+        self.info.restype = None
+        self.batch = getattr(lib, p + "batch")
+        self.batch.argtypes = [ctypes.c_long, vp, ctypes.c_double, ctypes.c_int, vp, vp, vp]
+        self.batch.restype = ctypes.c_int
+        self._lib = lib
+
+    def parameters(self, values: dict[str, float]) -> np.ndarray:
+        """The flat parameter vector of the library (each module's order, then the scene's)."""
+        flat = [values[k] for names in self.spec.parameter_layout for k in names]
+        return np.ascontiguousarray([*flat, 0.0], dtype=np.float64)
+
+
+def library(system: HybridSystem) -> CLibrary:
+    """The compiled simulator of ``system``, built once and kept on the system object."""
+    lib = system.__dict__.get("_c_simulator")
+    if lib is None:
+        lib = CLibrary(system)
+        system.__dict__["_c_simulator"] = lib
+    return lib
+
+
+def options_vector(
+    opts: Options, method: str, max_step: float, t0: float
+) -> tuple[int, np.ndarray]:
+    """The method's index and the C loop's option vector (see the template's ``new``).
+
+    ``rk4`` steps with ``max_step`` when it is shorter than the span, else span/1000 (as
+    :func:`symmech.simulate.simulate` chooses for the NumPy loop)."""
+    if method not in C_METHODS:
+        raise SimulationError(
+            f"method {method!r} is not available with backend='c': choose one of {C_METHODS}"
+            " (rodas4 runs with backend='numpy'; SciPy's implicit methods with backend='scipy')"
+        )
+    span = opts.t_end - t0
+    fixed = 0.0
+    if method == "rk4":
+        fixed = max_step if max_step < span else span / 1000
+    vec = [
+        opts.rtol,
+        opts.atol,
+        max_step,
+        fixed,
+        opts.t_end,
+        opts.zeno_factor,
+        float(opts.max_events),
+        float(opts.contact == "stop"),
+        float(opts.samples),
+    ]
+    return C_METHODS.index(method), np.array(vec, dtype=np.float64)
+
+
+def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str, str, float | None]:
+    """(status, message, accumulation time) of a run's info row, in the words of :mod:`.hybrid`."""
+    status = _STATUS.get(int(info[0]), "failed")
+    reason, wall, why, sub, fn = (int(x) for x in info[1:6])
+    d = [float(x) for x in info[7:11]]
+    walls = len(names)
+    if reason == _R_END:
+        return status, f"reached t_end = {t_end!r}", None
+    if reason == _R_MAX:
+        return status, f"stopped after {int(d[1])} events at t = {d[0]!r}", None
+    if reason == _R_SEQ:
+        return (
+            status,
+            f"simultaneous impacts at t = {d[0]!r} did not resolve in"
+            f" {100 * walls} applications of the sequential rule",
+            None,
+        )
+    if reason == _R_ACC:
+        why_text = (
+            "contact=stop"
+            if why == 0
+            else "the wall moves (no contact mode for a moving wall)"
+            if why == 1
+            else f"already in contact with {names[sub]!r}"
+        )
+        return (
+            status,
+            f"impacts on wall {names[wall]!r} accumulate at t* = {d[0]!r}"
+            f" (last impact at t = {d[1]!r}, rebound speed {d[2]:.3g}); stopped: {why_text}",
+            d[0],
+        )
+    if reason == _R_REST:
+        reason_text = (
+            "grazing contact with the wall pressing",
+            f"accumulation of impacts (t* ~ {d[1]!r})",
+            "initial state at rest on the wall",
+        )[sub]
+        why_text = (
+            "contact=stop",
+            "the wall moves",
+            "contact with two walls at once is not supported",
+        )
+        return (
+            status,
+            f"the body comes to rest on wall {names[wall]!r} at t = {d[0]!r}"
+            f" ({reason_text}); stopped: {why_text[why]}",
+            d[0],
+        )
+    if reason == _R_RHS:
+        return status, f"the right-hand side is not finite at t = {d[0]!r}", None
+    if reason == _R_SMALL:
+        return status, f"step size {d[0]:.3g} too small at t = {d[1]!r}", None
+    if reason == _R_FIXED:
+        return status, f"non-finite state after a fixed step at t = {d[0]!r}", None
+    if reason == _R_CALL:
+        name = _FUNCTIONS[fn] if 0 <= fn < len(_FUNCTIONS) else "a generated function"
+        return status, f"the generated function {name} failed at t = {d[0]!r}", None
+    return "failed", f"the C loop ended without a status (reason {reason})", None
+
+
+class _Hermite:
+    """The cubic Hermite interpolant of ``y0, f0, y1, f1`` on ``[t0, t1]`` (absolute time)."""
+
+    __slots__ = ("f0", "f1", "t0", "t1", "y0", "y1")
+
+    def __init__(self, row: np.ndarray, size: int):
+        self.t0, self.t1 = float(row[0]), float(row[1])
+        parts = [row[2 + k * size : 2 + (k + 1) * size] for k in range(4)]
+        self.y0, self.f0, self.y1, self.f1 = parts
+
+    def __call__(self, t: float) -> np.ndarray:
+        h = self.t1 - self.t0
+        if h == 0:
+            return self.y1.copy()
+        s = (t - self.t0) / h
+        s1 = 1 - s
+        return (
+            (1 + 2 * s) * s1 * s1 * self.y0
+            + s * s1 * s1 * h * self.f0
+            + s * s * (3 - 2 * s) * self.y1
+            + s * s * (s - 1) * h * self.f1
+        )
+
+
+def run_c(
+    system: HybridSystem,
+    values: dict[str, float],
+    y0: np.ndarray,
+    t0: float,
+    opts: Options,
+    *,
+    method: str = "dop853",
+    max_step: float,
+) -> SimulationResult:
+    """One hybrid run in the compiled C loop (arguments validated by
+    :func:`symmech.simulate.simulate`); the result has the form of the NumPy loop's."""
+    clock = _time.perf_counter()
+    index, vec = options_vector(opts, method, max_step, t0)
+    lib = library(system)
+    fns = Functions(system, values)
+    n, names = system.n, fns.wall_names
+    ny = 2 * n
+    P = lib.parameters(values)
+    y = np.ascontiguousarray(y0, dtype=np.float64)
+    handle = lib.new(index, vec.ctypes.data, P.ctypes.data, 1)
+    if not handle:
+        raise MemoryError("the C simulator could not allocate its work arrays")
+    room = 100 * max(fns.walls, 1) + 8
+    rec_cap, ev_cap = 1024, 4 * room
+    recs, segs, evs, evis = [], [], [], []
+    counts = np.zeros(3, dtype=np.int64)
+    info = np.zeros(INFO_HEAD + ny)
+    try:
+        lib.begin(handle, t0, y.ctypes.data)
+        while True:
+            rec = np.empty((rec_cap, ny + 1))
+            seg = np.empty((rec_cap, 2 + 4 * ny))
+            ev = np.empty((ev_cap, 3 + 3 * n))
+            evi = np.empty((ev_cap, 2), dtype=np.intc)
+            paused = lib.run(
+                handle,
+                rec.ctypes.data,
+                rec_cap,
+                seg.ctypes.data,
+                rec_cap,
+                ev.ctypes.data,
+                evi.ctypes.data,
+                ev_cap,
+                counts.ctypes.data,
+            )
+            recs.append(rec[: counts[0]])
+            segs.append(seg[: counts[1]])
+            evs.append(ev[: counts[2]])
+            evis.append(evi[: counts[2]])
+            if not paused:
+                break
+            rec_cap = min(2 * rec_cap, 1 << 20)
+            ev_cap = min(2 * ev_cap, max(1 << 18, 4 * room))
+        lib.info(handle, info.ctypes.data)
+    finally:
+        lib.free(handle)
+    status, message, accumulation = decode(info, names, opts.t_end)
+    records = np.concatenate(recs)
+    ev_all = np.concatenate(evs)
+    evi_all = np.concatenate(evis)
+    events = [
+        Event(
+            time=float(row[0]),
+            wall=int(ids[0]),
+            wall_name=names[int(ids[0])],
+            kind=EVENT_KINDS[int(ids[1])],
+            q=row[3 : 3 + n].copy(),
+            v_minus=row[3 + n : 3 + 2 * n].copy(),
+            v_plus=row[3 + 2 * n : 3 + 3 * n].copy(),
+            energy_change=float(row[1]),
+            normal_speed=float(row[2]),
+        )
+        for row, ids in zip(ev_all, evi_all, strict=True)
+    ]
+    segments = [(float(r[0]), float(r[1]), _Hermite(r, ny)) for part in segs for r in part]
+    stats = {
+        "steps": int(info[11]),
+        "rejected_steps": int(info[12]),
+        "rhs_calls": int(info[13]),
+        "jacobian_calls": 0,
+        "wall_time": _time.perf_counter() - clock,
+        "constraint_drift": float(info[14]),
+        "energy_drift": float(info[15]) if fns.energy_conserved else None,
+        "impacts": int(info[17]),
+        "grazing": int(info[18]),
+        "contacts": int(info[19]),
+        "releases": int(info[20]),
+    }
+    assert status in STATUSES
+    return SimulationResult(
+        t=records[:, 0].copy(),
+        q=records[:, 1 : 1 + n].copy(),
+        v=records[:, 1 + n :].copy(),
+        events=events,
+        status=status,
+        message=message,
+        stats=stats,
+        segments=segments,
+        n=n,
+        accumulation_time=accumulation,
+    )
