@@ -1,0 +1,1 @@
+"""Benchmarks and stress cases of the simulator: work-precision, stress, baselines."""
