@@ -12,18 +12,21 @@ import sys
 import types
 
 from symmech.simulate.api import CONTACT_MODES, simulate, system_for
+from symmech.simulate.batch import BatchResult, simulate_batch
 from symmech.simulate.result import Event, SimulationResult
 from symmech.simulate.system import BACKENDS, HybridSystem, SimulationError, contact_scene
 
 __all__ = [
     "BACKENDS",
     "CONTACT_MODES",
+    "BatchResult",
     "Event",
     "HybridSystem",
     "SimulationError",
     "SimulationResult",
     "contact_scene",
     "simulate",
+    "simulate_batch",
     "system_for",
 ]
 
