@@ -32,6 +32,12 @@ velocity tolerance ``tol_v = atol + rtol |v|_inf``:
   :func:`symmech.simulate.system.contact_scene`) until lambda_N would turn negative
   (**release**).  A moving wall has no contact mode: its accumulation stops the run.
 
+**Conditioning.**  Before each impact of a constrained scene the condition number of the
+Gram matrix ``[mu; dpsi S] g^-1 [mu; dpsi S]^T`` is computed (``stats["impact_condition"]``
+is the largest); the impulse's relative error grows like it, and past :data:`COND_LIMIT`
+the run stops with status ``"failed"`` and says why (a wall nearly dependent on the
+constraints).
+
 **Drift.**  After each accepted step of a constrained flow the velocity is projected with
 the mode's P(q) (Carnot paper section 2.2) and, in contact, the position is moved back onto
 psi = 0 along the gradient (one Newton step); the largest residual before projection is
@@ -51,8 +57,11 @@ from symmech.simulate.events import find_root
 from symmech.simulate.flow import FlowFailure, Segment
 from symmech.simulate.result import Event, SimulationResult
 
-__all__ = ["Options", "run"]
+__all__ = ["COND_LIMIT", "Options", "run"]
 
+#: Largest condition number of an impact's Gram matrix the loop accepts: the impulse's
+#: relative error is about cond * eps, so 1e-2 / eps keeps it below 1e-2.
+COND_LIMIT = 1e-2 / 2.220446049250313e-16
 
 
 @dataclass(frozen=True)
@@ -103,6 +112,7 @@ class _Run:
         self.energy_drift = 0.0
         self.drift = 0.0
         self.tol_psi = 10 * opts.atol
+        self.condition = 1.0
 
     @property
     def mode(self) -> int | None:
@@ -146,7 +156,9 @@ class _Run:
             )
         )
         if len(self.events) >= self.o.max_events:
-            raise _Stop("max_events", f"stopped after {len(self.events)} events at t = {float(self.t)!r}")
+            raise _Stop(
+                "max_events", f"stopped after {len(self.events)} events at t = {float(self.t)!r}"
+            )
 
     def needs_push(self, wall: int, y: np.ndarray) -> bool:
         """Whether the wall would have to push to keep the body out of it (lambda_N > 0)."""
@@ -203,9 +215,7 @@ class _Run:
                 return self.f.normal_rate(funcs[i][0], t0, seg.y0)
             return value(i, t0, seg.y0)
 
-        self._event_values = [
-            (lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))
-        ]
+        self._event_values = [(lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))]
 
         def crossed(i: int, a: float, b: float) -> bool:
             return (a > 0 >= b) if funcs[i][1] == "release" else (a >= 0 > b)
@@ -312,6 +322,15 @@ class _Run:
         for _ in range(100 * max(self.walls, 1)):
             y = self.y
             q, v = self.q(y), self.v(y)
+            cond = self.f.impact_condition(wall, self.t, q)
+            self.condition = max(self.condition, cond)
+            if cond > COND_LIMIT:
+                raise _Stop(
+                    "failed",
+                    f"wall {self.names[wall]!r} is nearly dependent on the constraints at"
+                    f" t = {float(self.t)!r}: the impact's Gram matrix has condition number"
+                    f" {cond:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
+                )
             v_plus = self.f.impact(wall, self.t, q, v)
             y_plus = np.concatenate([q, v_plus])
             if self.mode is not None:  # keep the active contact
@@ -370,10 +389,13 @@ class _Run:
             raise _Stop(
                 "zeno",
                 f"impacts on wall {self.names[wall]!r} accumulate at t* = {float(estimate)!r}"
-                f" (last impact at t = {float(self.t)!r}, rebound speed {float(rebound):.3g}); stopped: {why}",
+                f" (last impact at t = {float(self.t)!r}, rebound speed {float(rebound):.3g});"
+                f" stopped: {why}",
                 estimate,
             )
-        self.enter_contact(wall, rebound, reason=f"accumulation of impacts (t* ~ {float(estimate)!r})")
+        self.enter_contact(
+            wall, rebound, reason=f"accumulation of impacts (t* ~ {float(estimate)!r})"
+        )
 
     def enter_contact(self, wall: int, rate: float, reason: str) -> None:
         if self.f.moving[wall] or self.o.contact == "stop" or self.mode is not None:
@@ -484,6 +506,7 @@ def run(fns: Any, flow: Flow, t0: float, y0: np.ndarray, opts: Options) -> Simul
         "jacobian_calls": st.njev,
         "wall_time": wall_time,
         "constraint_drift": r.drift,
+        "impact_condition": r.condition,
         "energy_drift": r.energy_drift if fns.energy_conserved else None,
         "impacts": kinds.count("impact"),
         "grazing": kinds.count("grazing"),

@@ -168,6 +168,10 @@ class MpFunctions:
         )
         return max(abs(x) for x in r)
 
+    def impact_condition(self, wall: int, t: Any, q: np.ndarray) -> float:
+        """Not limited at 30+ digits: always 1 (see :meth:`.system.Functions.impact_condition`)."""
+        return 1.0
+
     def normal_force(self, wall: int, t: Any, q: np.ndarray, v: np.ndarray) -> Any:
         m = self.scene.constraint_matrix.rows
         if self.locked(wall):

@@ -363,6 +363,25 @@ class Functions:
             return float(np.max(np.abs(v), initial=0.0))
         return float(np.max(np.abs(self._call(mode, "constraint_residual", t, q, v))))
 
+    def impact_condition(self, wall: int, t: float, q: np.ndarray) -> float:
+        """The 2-norm condition number of the impact's Gram matrix ``C = A g^-1 A^T`` with
+        ``A = [mu; dpsi S]`` (Carnot paper section 3: the wall's one-form with the permanent
+        constraints), 1 for an unconstrained scene.  It bounds the relative error of the
+        impulse: a wall nearly in the constraint span makes C nearly singular."""
+        if not self.constrained:
+            return 1.0
+        n = self.n
+        eye = np.eye(n)
+        g = self._call(None, "mass_matrix", t, q)
+        mu = np.column_stack([self._call(None, "constraint_residual", t, q, e) for e in eye])
+        row = self.gradient(wall, t, q)
+        if self.system.scene.frame is not None:
+            S = np.column_stack([self.rhs(None, t, np.concatenate([q, e]))[:n] for e in eye])
+            row = row @ S
+        A = np.vstack([mu, row])
+        C = A @ np.linalg.solve(g, A.T)
+        return float(np.linalg.cond(C))
+
     def normal_force(self, wall: int, t: float, q: np.ndarray, v: np.ndarray) -> float:
         """lambda_N of the contact mode of ``wall`` at (q, v): positive while the wall
         pushes."""
