@@ -161,7 +161,8 @@ def test_raw_numpy_functions_take_only_the_arguments_they_read():
     assert params("psi_floor") == ["q", "t"]
     assert params("psit_floor") == ["q", "t"]
     assert params("dpsi_floor") == ["q"]
-    assert params("impact_floor") == ["q", "v", "t"]
+    # the closed-form impact's map does not read m (it cancels), its metric check does
+    assert params("impact_floor") == ["q", "v", "p", "t"]
     assert params("rhs") == ["y"]
     assert ns["psi_floor"](np.array([0.0, 0.5]), 0.0) == 0.5
     doc = code.files["symmech_clash.py"].split('"""')[1]

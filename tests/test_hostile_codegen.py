@@ -26,7 +26,7 @@ from codegen_support import require_c_compiler
 
 import symmech as sm
 from symmech import codegen
-from symmech.codegen.backends import ESCAPE_FILTERS, environment, template_root
+from symmech.codegen.backends import BACKENDS, ESCAPE_FILTERS, environment, templates_used
 from symmech.codegen.escape import (
     MAX_STEM,
     c_comment,
@@ -35,7 +35,7 @@ from symmech.codegen.escape import (
     python_comment,
     python_docstring,
 )
-from symmech.codegen.module import extension_source
+from symmech.codegen.module import EXTENSION_TEMPLATE, extension_source
 
 STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 
@@ -322,10 +322,14 @@ def _roots(node: jn.Node) -> set[str]:
 
 
 def _template_outputs():
+    """The output nodes of the code generator's templates: those of every backend and of
+    the CPython extension, with the templates they include or import."""
     env = environment()
-    root = template_root()
-    for path in sorted(root.rglob("*.jinja")):
-        name = path.relative_to(root).as_posix()
+    roots = [t for b in BACKENDS.values() for t, _ in b.templates]
+    roots += [b.function_template for b in BACKENDS.values()] + [EXTENSION_TEMPLATE]
+    names = sorted({t for root in roots for t in templates_used(root)})
+    assert len(names) >= 9, names
+    for name in names:
         tree = env.parse(env.loader.get_source(env, name)[0])  # type: ignore[union-attr]
         text_loops = {
             f.target.name

@@ -404,3 +404,67 @@ def test_real_array_never_returns_a_silently_converted_value():
     for bad in (True, "1", b"1", 1j, np.complex64(1), [[1.0], [1.0, 2.0]]):
         with pytest.raises(CodegenError, match=r"^x: "):
             real_array(bad, "x")
+
+
+# ------------------------------------- class 3: the closed forms check the metric as well
+
+
+def _constrained_scene() -> sm.Scene:
+    x, y, th = sm.coordinates("x y theta")
+    _, yd, thd = sm.velocities((x, y, th))
+    m, inertia, r = sp.symbols("m I R", positive=True)
+    return sm.Scene(
+        (x, y, th),
+        metric=sp.diag(m, m, inertia),
+        potential=m * y,
+        constraints=[yd + r * thd],
+        walls=[sm.Wall(x + 1, restitution=sp.Rational(1, 2), name="wall")],
+        name="metric_checks",
+    )
+
+
+@pytest.mark.parametrize("target", ["c", "numpy"])
+def test_closed_forms_raise_the_error_of_the_linear_solves_for_an_indefinite_metric(target):
+    """With a negative mass the wrapper refuses the call naming m; the generated code
+    itself (called without the wrapper) refuses it too: the closed forms check the metric's
+    Cholesky pivots as the linear solves do, with the same NumericalError."""
+    if target == "c":
+        require_c_compiler()
+    q, v = np.array([0.2, 0.3, 0.4]), np.array([-1.0, 0.5, -0.5])  # in D: y' + R theta' = 0
+    good, negative = np.array([1.5, 1.0, 2.0]), np.array([1.5, -1.0, 2.0])  # I, R, m
+    negative_m = np.array([1.5, 1.0, -2.0])
+    scene = _constrained_scene()
+    results = {}
+    for strategy in ("closed_form", "linear_solve"):
+        code = sm.codegen.generate(scene, target, strategy=strategy, projectors=True)
+        mod = code.load()
+        names = ["acceleration", "multipliers", "impact_wall", "rhs"]
+        names += ["projector_P", "projector_Q"] if strategy == "closed_form" else []
+        for name in names:
+            spec = mod._spec[name]
+            if strategy == "closed_form" and name != "rhs":
+                assert spec.metric_check, name
+            state = [np.concatenate([q, v])] if spec.state == ("y",) else [q, v][: len(spec.state)]
+            results[strategy, name] = mod.call(name, *state, params=good)
+            with pytest.raises(NumericalError, match=r"'m' = -2\.0 breaks 0 < m"):
+                mod.call(name, *state, params=negative_m)
+            with pytest.raises(NumericalError, match=r"'R' = -1\.0"):
+                mod.call(name, *state, params=negative)
+            with pytest.raises(NumericalError, match="positive definite"):
+                mod._raw[name](tuple(state), negative_m, None, None)
+    for name in ("acceleration", "multipliers", "impact_wall", "rhs"):
+        np.testing.assert_allclose(
+            results["closed_form", name], results["linear_solve", name], rtol=1e-12, atol=1e-14
+        )
+
+
+def test_a_metric_check_is_left_out_where_nothing_is_evaluated():
+    """The free body's acceleration is the constant 0: no metric check, no parameters."""
+    x, y = sm.coordinates("x y")
+    m = sp.Symbol("m", positive=True)
+    scene = sm.Scene((x, y), metric=sp.diag(m, m), walls=[sm.Wall(y)], name="free")
+    code = sm.codegen.generate(scene, "numpy", strategy="closed_form")
+    spec = {f.name: f for f in code.functions}
+    assert not spec["acceleration"].metric_check and not spec["acceleration"].takes_parameters
+    impact = next(f for f in code.functions if f.kind == "impact")
+    assert impact.metric_check and impact.takes_parameters

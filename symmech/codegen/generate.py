@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -23,8 +23,9 @@ import sympy as sp
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
 from symmech.codegen.escape import file_name
 from symmech.codegen.lower import LoweredFunction, Names, lower
-from symmech.codegen.plan import CodegenError, ScenePlan, build_plan
+from symmech.codegen.plan import Block, CodegenError, ScenePlan, build_plan
 from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
+from symmech.declaration.symbols import t as TIME
 
 if TYPE_CHECKING:
     from symmech.codegen.module import SceneModule
@@ -119,6 +120,7 @@ def generate(
         definitions=definitions,
         projectors=projectors,
     )
+    plan = _with_metric_checks(scene, plan, constants, definitions)
     rules = _parameter_rules(scene, plan)
     names = Names.of(plan)
     done: dict[str, LoweredFunction] = {}
@@ -162,6 +164,7 @@ def generate(
         "functions": list(lowered),
         "callees": {f.name: f for f in lowered},
         "steps": steps,
+        "solves": any(f.solve for f in lowered),
         "step_docs": STEP_DOCS,
         "prefix": f"{stem}_",
         "header": f"{stem}.h",
@@ -226,3 +229,68 @@ def _argument_notes(plan: ScenePlan, lowered: Sequence[LoweredFunction]) -> list
             "state arrays taken but not read (they fix the batch shape): " + ", ".join(unread)
         )
     return notes
+
+
+#: Closed forms that hold the inverse metric: their metric is checked at run time.
+METRIC_KINDS = ("acceleration", "multipliers", "impact", "projectors")
+
+
+def _with_metric_checks(
+    scene: Scene, plan: ScenePlan, constants: Mapping | None, definitions: Mapping | None
+) -> ScenePlan:
+    """``plan`` with the metric g as a block ``M`` of every function without a linear
+    solve that evaluates a closed form holding g^-1 (:data:`METRIC_KINDS`; not one that
+    is a constant, such as the zero acceleration of a free body): the generated
+    code checks it positive definite at the state and parameters of the call, as the
+    linear solves do (:func:`symmech.codegen.lower.lower`, ``metric_check``).  The block
+    is the plan's own ``mass_matrix`` (constants and definitions substituted), or the
+    same built alone."""
+    targets = [
+        f.name
+        for f in plan.functions
+        if f.step is None
+        and f.kind in METRIC_KINDS
+        and not all(e.is_number for b in f.blocks for e in b.entries)  # nothing evaluated
+    ]
+    if not targets:
+        return plan
+    try:
+        metric = plan.function("mass_matrix").blocks[0]
+    except KeyError:
+        alone = build_plan(
+            scene,
+            strategy=plan.strategy,
+            functions=["mass_matrix"],
+            constants=constants,
+            definitions=definitions,
+        )
+        # the input slots of the separate plan, renamed to this plan's (same f(t))
+        slots = {a: d for d, a in plan.inputs}
+        rename = {d: slots[a] for d, a in alone.inputs if a in slots}
+        metric = alone.function("mass_matrix").blocks[0]
+        if any(d not in rename and e.has(d) for d, _ in alone.inputs for e in metric.entries):
+            return replace(
+                plan,
+                omitted=(
+                    *plan.omitted,
+                    "metric checks of the closed forms: the metric reads an input that no"
+                    " generated function takes",
+                ),
+            )
+        metric = Block("M", metric.shape, tuple(e.xreplace(rename) for e in metric.entries))
+    block = Block("M", metric.shape, metric.entries)
+    syms: set = set().union(*[e.free_symbols for e in block.entries])
+    slots_used = bool(syms & {d for d, _ in plan.inputs})
+    functions = tuple(
+        replace(
+            f,
+            blocks=(*f.blocks, block),
+            uses_parameters=f.uses_parameters or bool(syms & set(plan.parameters)),
+            uses_time=f.uses_time or TIME in syms,
+            uses_inputs=f.uses_inputs or slots_used,
+        )
+        if f.name in targets
+        else f
+        for f in plan.functions
+    )
+    return replace(plan, functions=functions)

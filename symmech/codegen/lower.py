@@ -27,6 +27,14 @@ and printed by the backend's :class:`~symmech.codegen.unroll.Dialect`:
                               (the impulse-momentum system of the Carnot paper, eqs. 6,
                               15 and 20, by its Schur complement)
 
+A function without a step that evaluates a closed form holding ``g^-1`` (acceleration,
+multipliers, impact maps and projectors of the strategy ``closed_form``, the energy law's
+impact) carries the metric as a block ``M`` (see :func:`symmech.codegen.generate.generate`):
+its entries are checked finite and its Cholesky pivots positive, unrolled as for
+``spd_solve`` (``SYMMECH_NOT_SPD``, ``LinAlgError``: the error a linear solve raises), so a
+metric that the run-time parameters or the state make indefinite is never inverted
+silently (``metric_check``).
+
 The steps are unrolled at generation time into straight-line code over the entries that
 are not exact constants (:mod:`symmech.codegen.unroll`: same operations in the same order
 as the loop algorithms, minus those whose result IEEE arithmetic fixes in advance, such as
@@ -112,6 +120,7 @@ class LoweredFunction:
     solve: tuple[str, ...] = ()  # the unrolled step as printed lines (inputs, checks, out)
     cost: str = ""  # the header's cost line: operations, temporaries, solve, call
     expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
+    metric_check: bool = False  # the closed form's metric is checked positive definite
 
     @property
     def one_state_fast(self) -> bool:
@@ -285,7 +294,25 @@ def lower(
                 idx = divmod(flat, b.shape[1])
             where.append((b.name, flat, tuple(idx)))
     program = None
-    if f.step is not None:
+    check = f.step is None and any(b.name == "M" for b in f.blocks)
+    if check:
+        # the closed form's metric: finite entries and positive Cholesky pivots, traced as
+        # the factorisation of spd_solve with a zero right-hand side, whose stores of
+        # constant zeros are dropped; only the entries it reads are kept
+        M_block = next(b for b in f.blocks if b.name == "M")
+        n_m = M_block.shape[0]
+        consts = [_constant(e) for (blk, _, _), e in zip(where, entries, strict=True) if blk == "M"]
+        off = [consts[i * n_m + j] for i in range(n_m) for j in range(n_m) if i != j]
+        diag = int(all(c == 0.0 for c in off))
+        program = trace_step(
+            "spd_solve", (n_m, diag), {"M": (M_block.shape, consts), "f": ((n_m,), [0.0] * n_m)}
+        )
+        program.statements = [st for st in program.statements if st[0] != "out"]
+        needed = {(i.block, i.flat) for i in program.inputs}
+        keep = [i for i, (blk, flat, _) in enumerate(where) if blk != "M" or (blk, flat) in needed]
+        entries = [entries[i] for i in keep]
+        where = [where[i] for i in keep]
+    elif f.step is not None:
         # unroll the step over the structure of its inputs, then keep only the entries
         # it reads (they become locals; constants are folded into the unrolled code)
         shapes = {b.name: b.shape for b in f.blocks}
@@ -341,7 +368,15 @@ def lower(
     read = {k for k, _, _ in unpack}
     solve: tuple[str, ...] = ()
     flops = 0
-    if program is not None:
+    if check:
+        assert program is not None
+        exprs = {(blk, flat): text for blk, flat, text, _ in printed if blk == "M"}
+        solve = tuple(dialect.lines(program, f.out_shape, exprs))
+        flops = program.flops
+        assignments = tuple(a for a in printed if a[0] != "M")
+        blocks = tuple((b.name, b.size) for b in f.blocks if b.name not in ("out", "M"))
+        block_shapes = tuple((b.name, b.shape) for b in f.blocks if b.name != "M")
+    elif program is not None:
         exprs = {(blk, flat): text for blk, flat, text, _ in printed}
         solve = tuple(dialect.lines(program, f.out_shape, exprs))
         flops = program.flops
@@ -372,6 +407,8 @@ def lower(
             f"; solve: {flops} flops ({_step_sizes(f.step, f.step_args)}; dense:"
             f" {step_flops(f.step, f.step_args)})"
         )
+    if check:
+        cost += f"; metric check: {flops} flops"
     if callee is not None:
         cost += f"; then the call of {callee.name}: {callee.operations} operations"
         if callee.solve_flops:
@@ -404,4 +441,5 @@ def lower(
         solve=solve,
         cost=cost + ".",
         expressions=tuple(e for _, e in replacements) + tuple(final),
+        metric_check=check,
     )

@@ -229,7 +229,8 @@ long symmech_bouncing_ellipse_dpsi_wall_batch(long count, const double *q, const
 /*
  * impact_wall: post-impact velocity at wall 'wall' (newton law, closed form)
  *   v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)
- * Operations after CSE: 44 (sympy.count_ops); temporaries: 14.
+ * Operations after CSE: 44 (sympy.count_ops); temporaries: 14; metric check: 0 flops.
+ * Then a check that the metric g is positive definite (its Cholesky pivots, unrolled).
  * Output: 3 doubles.
  */
 int symmech_bouncing_ellipse_impact_wall(const double *q, const double *v, const double *p, double *out)
@@ -259,6 +260,13 @@ int symmech_bouncing_ellipse_impact_wall(const double *q, const double *v, const
     out[0] = p_I*tmp10*tmp11 - tmp12*tmp13;
     out[1] = v_ydot;
     out[2] = p_m*tmp11*tmp13 + tmp10*tmp12;
+    const double M0_0 = p_m;
+    const double M1_1 = p_m;
+    const double M2_2 = p_I;
+    if (!(isfinite(M0_0) && isfinite(M1_1) && isfinite(M2_2))) return SYMMECH_NONFINITE;
+    if (!(M0_0 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M1_1 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M2_2 > 0.0)) return SYMMECH_NOT_SPD;
     return sm_check_finite(3, out);
 }
 

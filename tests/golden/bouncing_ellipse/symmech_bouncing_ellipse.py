@@ -58,6 +58,18 @@ def check_parameters(p):
     return 0
 
 
+# The linear-algebra steps (Cholesky factorisations and solves) are unrolled into each
+# function at generation time (symmech/codegen/unroll.py): straight-line code, the same
+# operations in the same order as the C code.
+
+
+def _require_finite(*values):
+    """SYMMECH_NONFINITE of the C code: every run-time input of a linear solve is finite."""
+    for value in values:
+        if not numpy.isfinite(value).all():
+            raise FloatingPointError("an input of a linear solve is not finite")
+
+
 def mass_matrix(q, p):
     """kinetic metric g(q) in the velocity basis.
 
@@ -202,7 +214,8 @@ def impact_wall(q, v, p):
     """post-impact velocity at wall 'wall' (newton law, closed form).
 
     v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)
-    Operations after CSE: 44 (sympy.count_ops); temporaries: 14.
+    Operations after CSE: 44 (sympy.count_ops); temporaries: 14; metric check: 0 flops.
+    Then a check that the metric g is positive definite (its Cholesky pivots, unrolled).
     Arguments: q, v, p.  Output shape: (...) + (3,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
@@ -234,4 +247,14 @@ def impact_wall(q, v, p):
     out[..., 0] = p_I*tmp10*tmp11 - tmp12*tmp13
     out[..., 1] = v_ydot
     out[..., 2] = p_m*tmp11*tmp13 + tmp10*tmp12
+    M0_0 = p_m
+    M1_1 = p_m
+    M2_2 = p_I
+    _require_finite(M0_0, M1_1, M2_2)
+    if not numpy.all(M0_0 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M1_1 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M2_2 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
     return out

@@ -223,7 +223,8 @@ long symmech_carnot_3_7_dpsi_rough_wall_batch(long count, const double *q, doubl
 /*
  * impact_rough_wall: post-impact velocity at wall 'rough_wall' (newton law, closed form)
  *   v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)
- * Operations after CSE: 14 (sympy.count_ops); temporaries: 5.
+ * Operations after CSE: 15 (sympy.count_ops); temporaries: 5; metric check: 0 flops.
+ * Then a check that the metric g is positive definite (its Cholesky pivots, unrolled).
  * Output: 3 doubles.
  */
 int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const double *p, double *out)
@@ -235,6 +236,7 @@ int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const
     const double p_R = p[0];
     const double p_alpha = p[1];
     const double p_k = p[2];
+    const double p_m = p[3];
     const double tmp0 = (p_R*p_R);
     const double tmp1 = (p_k*p_k);
     const double tmp2 = (1.0/(tmp0 + tmp1));
@@ -243,6 +245,13 @@ int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const
     out[0] = p_R*tmp4 + tmp0*tmp3;
     out[1] = -p_alpha*v_ydot;
     out[2] = p_R*tmp3 + tmp4;
+    const double M0_0 = p_m;
+    const double M1_1 = p_m;
+    const double M2_2 = p_m*tmp1;
+    if (!(isfinite(M0_0) && isfinite(M1_1) && isfinite(M2_2))) return SYMMECH_NONFINITE;
+    if (!(M0_0 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M1_1 > 0.0)) return SYMMECH_NOT_SPD;
+    if (!(M2_2 > 0.0)) return SYMMECH_NOT_SPD;
     return sm_check_finite(3, out);
 }
 

@@ -58,6 +58,18 @@ def check_parameters(p):
     return 0
 
 
+# The linear-algebra steps (Cholesky factorisations and solves) are unrolled into each
+# function at generation time (symmech/codegen/unroll.py): straight-line code, the same
+# operations in the same order as the C code.
+
+
+def _require_finite(*values):
+    """SYMMECH_NONFINITE of the C code: every run-time input of a linear solve is finite."""
+    for value in values:
+        if not numpy.isfinite(value).all():
+            raise FloatingPointError("an input of a linear solve is not finite")
+
+
 def mass_matrix(q, p):
     """kinetic metric g(q) in the velocity basis.
 
@@ -195,7 +207,8 @@ def impact_rough_wall(q, v, p):
     """post-impact velocity at wall 'rough_wall' (newton law, closed form).
 
     v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)
-    Operations after CSE: 14 (sympy.count_ops); temporaries: 5.
+    Operations after CSE: 15 (sympy.count_ops); temporaries: 5; metric check: 0 flops.
+    Then a check that the metric g is positive definite (its Cholesky pivots, unrolled).
     Arguments: q, v, p.  Output shape: (...) + (3,).
     """
     q = numpy.asarray(q, dtype=numpy.float64)
@@ -207,6 +220,7 @@ def impact_rough_wall(q, v, p):
     p_R = p[..., 0]
     p_alpha = p[..., 1]
     p_k = p[..., 2]
+    p_m = p[..., 3]
     tmp0 = (p_R*p_R)
     tmp1 = (p_k*p_k)
     tmp2 = (1.0/(tmp0 + tmp1))
@@ -216,4 +230,14 @@ def impact_rough_wall(q, v, p):
     out[..., 0] = p_R*tmp4 + tmp0*tmp3
     out[..., 1] = -p_alpha*v_ydot
     out[..., 2] = p_R*tmp3 + tmp4
+    M0_0 = p_m
+    M1_1 = p_m
+    M2_2 = p_m*tmp1
+    _require_finite(M0_0, M1_1, M2_2)
+    if not numpy.all(M0_0 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M1_1 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not numpy.all(M2_2 > 0.0):
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
     return out
