@@ -696,12 +696,6 @@ def _derive(
     progress(f"mass matrix and forcing of {scene.name} ({scene.n} coordinates)")
     scene.mass_matrix()
     scene.forcing()
-    if scene.is_constrained:
-        progress("constraint projectors")
-        scene.projectors()
-    for wall in scene.walls:
-        progress(f"impact map of wall {wall.name!r} ({wall.law} law)")
-        scene.impact_map(wall.index)
     written: list[Path] = []
     for target in dict.fromkeys(targets):
         if out is None:
@@ -712,6 +706,8 @@ def _derive(
             folder = Path(out)
         progress(f"generating {target} code ({strategy} strategy) into {folder}")
         code = codegen.generate(scene, target, strategy=strategy)
+        if code.plan.fallback:
+            progress(code.plan.fallback)
         written.extend(code.write(folder))
     return written
 

@@ -20,9 +20,10 @@ import pytest
 import sympy as sp
 
 import symmech as sm
+from symmech import budget
+from symmech.budget import BudgetExceeded
 from symmech.examples import car, pendulum_on_cart
-from symmech.geometry import field as field_module
-from symmech.geometry.adjugate import BudgetExceeded, adjugate_det
+from symmech.geometry.adjugate import adjugate_det
 from symmech.geometry.field import RationalField, field_solve
 from symmech.geometry.simplification import normal_form
 
@@ -143,7 +144,7 @@ def test_pendulum_acceleration_exact():
 def test_fallback_beyond_the_term_budget_is_exact(monkeypatch):
     # With a tiny budget the solve declines and the symbols are the LU solution: exact.
     mpmath.mp.dps = DPS
-    monkeypatch.setattr(field_module, "TERM_BUDGET", 5)
+    monkeypatch.setattr(budget, "FIELD_MINOR_TERMS", 5)
     scene = pendulum_on_cart(2)
     q = scene.coordinates
     gamma = scene.christoffel()

@@ -23,8 +23,8 @@ import sympy as sp
 from test_impacts_support import kkt_at
 
 import symmech as sm
-from symmech import examples
-from symmech.impacts import adjugate, carnot, derive_impact_map
+from symmech import budget, examples
+from symmech.impacts import carnot, derive_impact_map
 from symmech.impacts.identity import DegreeBound, Unsupported, identically_zero
 
 M, m, l, I, J, c, R = sp.symbols("M m l I J c R", positive=True)
@@ -188,10 +188,10 @@ def test_adjugate_route_agrees_with_an_independent_inverse():
 def test_bounded_cancellation_and_budget_fallback_stay_exact(monkeypatch):
     scene = polynomial_system()
     reference = derive_impact_map(scene.declaration, 0)
-    monkeypatch.setattr(adjugate, "GCD_MAX_TERMS", 0)  # no gcd at all: content only
+    monkeypatch.setattr(budget, "IMPACT_GCD_TERMS", 0)  # no gcd at all: content only
     uncancelled = derive_impact_map(scene.declaration, 0)
     assert uncancelled.projectors.denominators is not None
-    monkeypatch.setattr(adjugate, "TERM_BUDGET", 1)  # the route declines: sympy route
+    monkeypatch.setattr(budget, "IMPACT_TERMS", 1)  # the route declines: sympy route
     fallback = derive_impact_map(scene.declaration, 0)
     assert fallback.projectors.denominators is None
     for other in (uncancelled, fallback):
@@ -235,7 +235,7 @@ def test_carnot_routes(monkeypatch):
     small = imp.carnot()
     assert small.route == "fraction field" and small.error_bound == 0
     assert small.symbolic_residual() == 0
-    monkeypatch.setattr(carnot, "FIELD_MAX_OPS", 0)
+    monkeypatch.setattr(budget, "CARNOT_FIELD_OPS", 0)
     for restrict in (False, True):
         result = carnot.carnot_residual(
             imp.projectors,

@@ -20,6 +20,7 @@ PKG = ROOT / "symmech"
 # codegen -> simulate -> verify/bench -> cli
 LAYERS = [
     "errors",
+    "budget",
     "declaration",
     "geometry",
     "constraints",

@@ -44,6 +44,9 @@ from typing import TYPE_CHECKING
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech import budget as limits
+from symmech.budget import BudgetExceeded
+from symmech.codegen.closed_form_budget import closed_form_cost
 from symmech.codegen.printers import identifier
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
@@ -93,13 +96,6 @@ WALL_PREFIXES = {"psi": "psi_", "dpsi": "dpsi_", "psi_t": "psit_", "impact": "im
 
 #: Suffix of the C batch function of each generated function.
 BATCH_SUFFIX = "_batch"
-
-#: Above this number of coordinates the default strategy is ``linear_solve``.
-CLOSED_FORM_MAX_N = 3
-
-#: Velocity-free entries up to this many operations are put in the stable form of
-#: :func:`symmech.impacts.stability.stable_coefficient` before code generation.
-STABLE_ENTRY_MAX_OPS = 200
 
 
 class CodegenError(SymmechError, ValueError):
@@ -177,6 +173,8 @@ class ScenePlan:
     strategy: str
     functions: tuple[FunctionPlan, ...]
     omitted: tuple[str, ...] = field(default=())
+    #: why strategy ``auto`` fell back to ``linear_solve`` (a budget), else None
+    fallback: str | None = None
 
     def function(self, name: str) -> FunctionPlan:
         for f in self.functions:
@@ -320,8 +318,18 @@ def build_plan(
 
     ``strategy``: ``"closed_form"`` evaluates the symbolic acceleration, multipliers and
     impact maps; ``"linear_solve"`` emits g, f, the constraint and wall one-forms and
-    solves the linear systems in the generated code; ``"auto"`` (default) is closed form
-    up to :data:`CLOSED_FORM_MAX_N` coordinates.  ``functions`` restricts the kinds
+    solves the linear systems in the generated code, and derives nothing else (no
+    closed form; only the energy law of text 001, which is not linear, keeps its closed
+    impact map); ``"auto"`` (default) is closed form up to
+    :data:`symmech.budget.CLOSED_FORM_MAX_N` coordinates when the closed forms fit their
+    budgets, else ``linear_solve``.
+
+    Budgets (:mod:`symmech.budget`).  The closed forms are first sized from the structure
+    (:func:`symmech.codegen.closed_form_budget.closed_form_cost`, at once), then derived
+    within :data:`symmech.budget.CLOSED_FORM_SECONDS`.  Over either budget, ``"auto"``
+    takes ``linear_solve`` and says so in ``omitted`` and :attr:`ScenePlan.fallback`;
+    ``"closed_form"`` raises :class:`CodegenError` naming the stage and the budget.
+    ``functions`` restricts the kinds
     emitted (names from :data:`FUNCTIONS`).  ``constants`` bakes parameter values in
     (folded into the expressions); the other parameters are run-time inputs ``p``.
     ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
@@ -337,23 +345,48 @@ def build_plan(
         wanted.add("projectors")
     elif functions is None:
         wanted.discard("projectors")
+    options = (wanted, constants or {}, definitions or {})
+    if strategy == "linear_solve" or (strategy == "auto" and scene.n > limits.CLOSED_FORM_MAX_N):
+        return _build(scene, "linear_solve", *options)
+    try:
+        closed_form_cost(scene, walls="impact" in wanted)
+        stage = f"closed forms of scene {scene.name!r}"
+        with limits.time_limit(stage, limits.CLOSED_FORM_SECONDS):
+            return _build(scene, "closed_form", *options)
+    except BudgetExceeded as exc:
+        if strategy == "closed_form":
+            raise CodegenError(
+                f"strategy 'closed_form': {exc}; strategy 'linear_solve' solves the same"
+                " equations in the generated code"
+            ) from None
+        note = f"strategy auto: {exc}; linear_solve is used instead of closed forms"
+    return _build(scene, "linear_solve", *options, fallback=note)
+
+
+def _build(
+    scene: Scene,
+    strategy: str,
+    wanted: set[str],
+    constants: Mapping,
+    definitions: Mapping,
+    fallback: str | None = None,
+) -> ScenePlan:
+    """The plan with a concrete strategy (``closed_form`` or ``linear_solve``)."""
     n, m = scene.n, scene.constraint_matrix.rows
-    if strategy == "auto":
-        strategy = "closed_form" if n <= CLOSED_FORM_MAX_N else "linear_solve"
-    baked = _check_constants(scene, constants or {})
+    baked = _check_constants(scene, constants)
     # a float constant is a double: substitute its exact (dyadic) value, so that x**k
     # with k = 2.0 is x**2 and the folding of constants rounds once, at printing
     exact = {s: sp.Rational(val) if isinstance(val, sp.Float) else val for s, val in baked.items()}
     runtime = tuple(p for p in scene.parameters if p not in baked)
     defs: dict = {}
-    for key, value in (definitions or {}).items():
+    for key, value in definitions.items():
         f = key(TIME) if isinstance(key, sp.FunctionClass) else key
         if not isinstance(f, AppliedUndef):
             raise CodegenError(f"definitions: {key!r} is not an arbitrary function of t")
         defs[f] = sp.sympify(value)
     inputs = _Inputs(defs)
     q, v = scene.coordinates, scene.velocities
-    omitted: list[str] = []
+    omitted: list[str] = [fallback] if fallback else []
     plans: list[FunctionPlan] = []
 
     state = (*q, TIME)
@@ -374,7 +407,7 @@ def build_plan(
         if (
             not out.is_number
             and not (out.free_symbols & velocity_set)
-            and sp.count_ops(out) <= STABLE_ENTRY_MAX_OPS
+            and sp.count_ops(out) <= limits.STABLE_ENTRY_OPS
         ):
             out = stable_coefficient(out, state)
         prepared[e] = out
@@ -524,7 +557,7 @@ def build_plan(
             "total energy T + V",
             "E = 1/2 v^T g v + V(q, t)",
             ("q", "v"),
-            [_scalar_block("out", scene.energy())],
+            [_scalar_block("out", _energy(M, v, scene.potential))],
             (),
         )
     if m:
@@ -622,9 +655,9 @@ def build_plan(
                     f"{wall_function_name('psi_t', wid)}: {label} does not move (d psi/d t = 0)"
                 )
         if "impact" in wanted:
-            imp = scene.impact_map(w.index)
             name = wall_function_name("impact", wid)
             if closed or w.law == "energy":
+                imp = _energy_law_map(scene, w) if not closed else scene.impact_map(w.index)
                 if not closed:
                     omitted.append(
                         f"{name}: the energy law (text 001, 3.2) is not linear;"
@@ -691,7 +724,30 @@ def build_plan(
         strategy=strategy,
         functions=tuple(plans),
         omitted=tuple(omitted),
+        fallback=fallback,
     )
+
+
+def _energy(M: sp.Matrix, v: Sequence[sp.Symbol], V: sp.Expr) -> sp.Expr:
+    """``E = 1/2 v^T g v + V`` as ``sum_i g_ii v_i^2 / 2 + sum_{i<j} g_ij v_i v_j + V``,
+    over the non-zero entries and without expanding them (the printed code evaluates
+    each entry once; :meth:`Scene.energy` expands, which costs seconds at n = 32)."""
+    n = len(v)
+    terms = [M[i, i] * v[i] ** 2 / 2 for i in range(n) if M[i, i] != 0]
+    terms += [M[i, j] * v[i] * v[j] for i in range(n) for j in range(i + 1, n) if M[i, j] != 0]
+    return sp.Add(*terms, V)
+
+
+def _energy_law_map(scene: Scene, wall) -> object:
+    """The closed-form impact map of an energy-law wall under ``linear_solve`` (there is
+    no linear system to solve for it), within :data:`symmech.budget.CLOSED_FORM_SECONDS`;
+    over budget a :class:`CodegenError` names the wall and the budget."""
+    stage = f"closed-form energy-law impact map of wall {wall.name!r}"
+    try:
+        with limits.time_limit(stage, limits.CLOSED_FORM_SECONDS):
+            return scene.impact_map(wall.index)
+    except BudgetExceeded as exc:
+        raise CodegenError(f"{exc}; the energy law has no linear_solve form") from None
 
 
 def _forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[str]:

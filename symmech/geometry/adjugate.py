@@ -12,7 +12,7 @@ whose exact divisions or powers of A cannot be reduced on the way, must carry).
 
 Cost: ``n 2^(n-1)`` products for the minors and as many for the cofactors, so the routine
 is meant for n up to about 8; a term budget bounds the work: when the minors formed so far
-hold more terms than ``budget``, :class:`BudgetExceeded` is raised.
+hold more terms than ``budget``, :class:`symmech.budget.BudgetExceeded` is raised.
 """
 
 from __future__ import annotations
@@ -21,14 +21,12 @@ from collections.abc import Callable, Sequence
 from itertools import combinations
 from typing import Any
 
-__all__ = ["BudgetExceeded", "adjugate_det"]
+from symmech.budget import BudgetExceeded
+
+__all__ = ["adjugate_det"]
 
 Poly = Any  # a sympy PolyElement
 Reduce = Callable[[Poly], Poly]
-
-
-class BudgetExceeded(Exception):
-    """The minors of the matrix hold more terms than the budget allows."""
 
 
 def _expand(
@@ -88,7 +86,13 @@ def adjugate_det(
         p = reduce(p)
         held += len(p)
         if budget is not None and held > budget:
-            raise BudgetExceeded(f"minors and cofactors hold more than {budget} terms")
+            raise BudgetExceeded(
+                "Laplace expansion (minors and cofactors)",
+                "FIELD_MINOR_TERMS",
+                "terms",
+                budget,
+                held,
+            )
         return p
 
     # top[k][S]: minor of rows 0..k-1 on columns S; bottom[r][T]: rows r..n-1 on T.

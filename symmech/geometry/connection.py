@@ -109,7 +109,8 @@ def _raise_index(
       returned with :func:`tidy` applied, which skips large entries, so the cost stays
       bounded and the result exact;
     * ``"full"``: ``"light"``, then ``sympy.simplify`` on each entry of at most
-      ``FULL_MAX_OPS`` operations, kept only when it is not longer (:func:`polish`).
+      :data:`symmech.budget.FULL_SIMPLIFY_OPS` operations, kept only when it is not
+      longer (:func:`polish`).
     """
     n = g.rows
     F = sp.Matrix(n, len(columns), lambda k, c: columns[c][k])

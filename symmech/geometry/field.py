@@ -33,7 +33,7 @@ Solving ``A X = B`` (:func:`field_solve`), strategy by cost:
   and callers use plain sympy arithmetic;
 * A is split into its diagonal blocks (connected components of its non-zero pattern);
   a 1 x 1 block is divided directly;
-* a block of size ``2 <= k <= LAPLACE_MAX_N`` is solved fraction-free: its rows (with the
+* a block of size ``2 <= k <= FIELD_BLOCK_MAX_N`` is solved fraction-free: its rows (with the
   matching rows of B) are cleared of denominators, ``adj`` and ``det`` are formed once by
   the division-free Laplace expansion of :mod:`symmech.geometry.adjugate` with the
   Pythagorean reduction applied to every minor, and ``X = (adj B) / det``; each entry is
@@ -41,7 +41,8 @@ Solving ``A X = B`` (:func:`field_solve`), strategy by cost:
   would cancel a gcd at every elimination step, and on trigonometric entries, whose
   unreduced intermediates are much larger than the reduced result (the 4 x 4
   pendulum-on-cart metric did not finish in 250 s), that dominates the cost;
-* a larger block, or one whose minors exceed ``TERM_BUDGET`` terms: ``None`` (the normal
+* a larger block (:data:`symmech.budget.FIELD_BLOCK_MAX_N`), or one whose minors exceed
+  :data:`symmech.budget.FIELD_MINOR_TERMS` terms: ``None`` (the normal
   form itself is then too large to be useful: the determinant of the 9 x 9
   pendulum-on-cart metric has 3^8 = 6561 terms).
 """
@@ -56,24 +57,16 @@ from sympy.core.mul import _keep_coeff
 from sympy.polys.constructor import construct_domain
 from sympy.polys.matrices import DomainMatrix
 
-from symmech.geometry.adjugate import BudgetExceeded, adjugate_det
+from symmech import budget as limits
+from symmech.budget import BudgetExceeded
+from symmech.geometry.adjugate import adjugate_det
 
 __all__ = [
-    "LAPLACE_MAX_N",
-    "TERM_BUDGET",
     "RationalField",
     "common_domain",
     "field_inverse",
     "field_solve",
 ]
-
-#: Largest diagonal block solved fraction-free by Laplace expansion (n 2^n products).
-LAPLACE_MAX_N = 8
-#: Largest number of terms the minors and cofactors of one block may hold.
-TERM_BUDGET = 25_000
-#: Gcds against a shared denominator with more terms than this cancel only its monomial
-#: and integer content (a multivariate gcd per entry would dominate the cost).
-GCD_MAX_TERMS = 400
 
 Frac = Any  # a sympy FracElement
 Rows = list[list[Any]]
@@ -142,8 +135,13 @@ class RationalField:
                         self.forward[partner] = dummy = sp.Dummy("gen")
                         self.back[dummy] = partner
                         replaced.append(dummy)
-        K, _ = construct_domain(replaced, field=True)
-        self.K = None if K.is_EX or K.is_EXRAW else K
+        #: why the field declined (None when it exists): a budget of symmech.budget
+        self.declined: str | None = _over_budget(replaced)
+        if self.declined is None:
+            K, _ = construct_domain(replaced, field=True)
+            self.K = None if K.is_EX or K.is_EXRAW else K
+        else:
+            self.K = None
         self.pairs: list[tuple[int, int]] = []
         self._powers: dict[tuple[int, int], Any] = {}
         self._exprs: dict[Any, sp.Expr] = {}
@@ -300,8 +298,8 @@ class RationalField:
     def solve(self, A: Rows, B: Rows, budget: int | None = None) -> Rows | None:
         """``X`` with ``A X = B`` (square, generically regular A), entries normalised; the
         strategy of the module docstring.  ``None`` when it declines (block too large or
-        over the term budget, by default :data:`TERM_BUDGET`)."""
-        budget = TERM_BUDGET if budget is None else budget
+        over the term budget, by default :data:`symmech.budget.FIELD_MINOR_TERMS`)."""
+        budget = limits.FIELD_MINOR_TERMS if budget is None else budget
         n = len(A)
         ncols = len(B[0]) if B else 0
         X: Rows = [[self.K.zero] * ncols for _ in range(n)]
@@ -313,7 +311,7 @@ class RationalField:
                 inv = 1 / A[i][i]
                 X[i] = [self.normal(b * inv) if b else b for b in B[i]]
                 continue
-            if len(block) > LAPLACE_MAX_N or not self.K.is_FractionField:
+            if len(block) > limits.FIELD_BLOCK_MAX_N or not self.K.is_FractionField:
                 if not self.K.is_FractionField:  # rational numbers: exact LU over QQ
                     sub = self._lu_block(A, B, block)
                     for r, i in enumerate(block):
@@ -322,7 +320,8 @@ class RationalField:
                 return None
             try:
                 sub = self._adjugate_block(A, B, block, budget)
-            except BudgetExceeded:
+            except BudgetExceeded as exc:
+                limits.propagate_time(exc)
                 return None
             for r, i in enumerate(block):
                 X[i] = sub[r]
@@ -360,6 +359,20 @@ class RationalField:
                 row.append(_quotient(self.K.field, self.reduce(num), det))
             out.append(row)
         return out
+
+
+def _over_budget(exprs: Sequence[sp.Expr]) -> str | None:
+    """The reason the inputs are not expanded into a polynomial domain, or None: one of
+    them expands (bound of :func:`symmech.budget.expanded_terms`) to more than
+    :data:`symmech.budget.FIELD_TERMS` terms or to a degree above
+    :data:`symmech.budget.FIELD_DEGREE` (construct_domain would expand it in full)."""
+    for e in exprs:
+        terms, degree = limits.expanded_terms(e)
+        if terms > limits.FIELD_TERMS:
+            return f"an entry expands to about {terms} terms (FIELD_TERMS = {limits.FIELD_TERMS})"
+        if degree > limits.FIELD_DEGREE:
+            return f"an entry has degree {degree} (FIELD_DEGREE = {limits.FIELD_DEGREE})"
+    return None
 
 
 _RECIPROCAL = {
@@ -411,11 +424,12 @@ def _monomial_gcd(p: Any) -> tuple[tuple[int, ...], Any]:
 
 
 def _quotient(field: Any, num: Any, den: Any) -> Frac:
-    """``num / den`` cancelled: by the full gcd when ``den`` has at most ``GCD_MAX_TERMS``
-    terms, else by the monomial and integer content only (still exact)."""
+    """``num / den`` cancelled: by the full gcd when ``den`` has at most
+    :data:`symmech.budget.FIELD_GCD_TERMS` terms, else by the monomial and integer content
+    only (still exact)."""
     if not num:
         return field.zero
-    if len(den) <= GCD_MAX_TERMS:
+    if len(den) <= limits.FIELD_GCD_TERMS:
         return field.new(num, den)
     m1, m2 = _monomial_gcd(num)[0], _monomial_gcd(den)[0]
     mono = tuple(min(a, b) for a, b in zip(m1, m2, strict=True))

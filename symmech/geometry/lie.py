@@ -38,6 +38,7 @@ import mpmath
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
+from symmech.budget import BudgetExceeded
 from symmech.declaration.sampling import sample_points
 from symmech.errors import SceneError
 from symmech.geometry.field import common_domain
@@ -354,6 +355,8 @@ def _symbolic_rank(M: sp.Matrix) -> int:
         return 0
     try:
         return int(DomainMatrix.from_Matrix(M).to_field().rank())
+    except BudgetExceeded:  # a deadline of the stage around it
+        raise
     except Exception:  # domain construction can fail on exotic expressions
         return int(M.rank(simplify=True))
 

@@ -15,19 +15,20 @@ and large systems never pay for a full ``sympy.simplify``:
     polynomials in sin and cos), with a shared determinant; the solve chooses its route
     by cost and declines (falling back to the entries as built, then :func:`tidy`) when
     the normal form would be too large.  Single expressions (Christoffel symbols of the
-    first kind, brackets) get :func:`normal_form` when they have at most ``LIGHT_MAX_OPS``
-    operations.  :func:`tidy` itself, used on intermediate results, applies
-    ``sympy.cancel`` to rational expressions (no function applications such as sin, sqrt
-    of a non-symbol) of at most ``LIGHT_MAX_OPS`` operations, clearing nested fractions
-    such as those from a Gram inverse, then ``factor_terms``; expressions with functions
-    get ``factor_terms`` only.
+    first kind, brackets) get :func:`normal_form` when they have at most
+    :data:`symmech.budget.LIGHT_SIMPLIFY_OPS` operations. :func:`tidy` itself, used on
+    intermediate results, applies ``sympy.cancel`` to rational expressions (no function
+    applications such as sin, sqrt of a non-symbol) of at most that many operations,
+    clearing nested fractions such as those from a Gram inverse, then ``factor_terms``;
+    expressions with functions get ``factor_terms`` only.
 ``"full"`` (default for Christoffel symbols and connection coefficients)
     ``"light"``, then ``sympy.simplify`` (which includes trigsimp) on each entry of at
-    most ``FULL_MAX_OPS`` operations, the simplified form kept only when it has no more
-    operations (:func:`polish`).
+    most :data:`symmech.budget.FULL_SIMPLIFY_OPS` operations, the simplified form kept
+    only when it has no more operations (:func:`polish`).
 
-The thresholds keep the cost bounded: simplification is skipped, never approximated, and
-every result is exact.  An unknown level raises :class:`symmech.errors.SceneError`.
+The thresholds (budgets of :mod:`symmech.budget`) keep the cost bounded: simplification is
+skipped, never approximated, and every result is exact. An unknown level raises
+:class:`symmech.errors.SceneError`.
 """
 
 from __future__ import annotations
@@ -37,13 +38,12 @@ from typing import Literal
 
 import sympy as sp
 
+from symmech import budget as limits
 from symmech.errors import SceneError
 from symmech.geometry.field import RationalField
 
 __all__ = [
-    "FULL_MAX_OPS",
     "LEVELS",
-    "LIGHT_MAX_OPS",
     "Level",
     "check_level",
     "normal_form",
@@ -55,8 +55,6 @@ __all__ = [
 
 Level = Literal["none", "light", "full"]
 LEVELS: tuple[str, ...] = ("none", "light", "full")
-LIGHT_MAX_OPS = 400
-FULL_MAX_OPS = 150
 
 
 def check_level(level: object, where: str, argument: str = "simplify") -> Level:
@@ -72,19 +70,21 @@ def tidy(expr: sp.Expr, level: Level = "light") -> sp.Expr:
     """Simplify ``expr`` according to ``level`` (see the module docstring)."""
     check_level(level, "tidy", "level")
     expr = sp.sympify(expr)
-    if level == "none" or expr.is_number or expr.is_Symbol or not _small(expr, LIGHT_MAX_OPS):
+    if level == "none" or expr.is_number or expr.is_Symbol:
+        return expr
+    if not _small(expr, limits.LIGHT_SIMPLIFY_OPS):
         return expr
     ops = sp.count_ops(expr)
-    if level == "full" and ops <= FULL_MAX_OPS:
+    if level == "full" and ops <= limits.FULL_SIMPLIFY_OPS:
         return sp.simplify(expr)
-    if ops <= LIGHT_MAX_OPS:
+    if ops <= limits.LIGHT_SIMPLIFY_OPS:
         if _is_rational_function(expr):
             return sp.factor_terms(sp.cancel(expr))
         return sp.factor_terms(expr)
     return expr
 
 
-def normal_form(expr: sp.Expr, max_ops: int = LIGHT_MAX_OPS) -> sp.Expr:
+def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
     """The exact rational normal form of ``expr`` with the Pythagorean reduction.
 
     ``expr`` is read in the fraction field of its building blocks (parameters,
@@ -98,10 +98,12 @@ def normal_form(expr: sp.Expr, max_ops: int = LIGHT_MAX_OPS) -> sp.Expr:
     >>> normal_form((1 - sp.cos(x) ** 2) / sp.sin(x))
     sin(x)
 
-    Expressions over ``max_ops`` operations, numbers, and expressions admitting no exact
+    Expressions over ``max_ops`` operations (default
+    :data:`symmech.budget.LIGHT_SIMPLIFY_OPS`), numbers, and expressions admitting no exact
     field are returned as given, then passed to ``factor_terms``.
     """
     expr = sp.sympify(expr)
+    max_ops = limits.LIGHT_SIMPLIFY_OPS if max_ops is None else max_ops
     if expr.is_number or expr.is_Symbol or not _small(expr, max_ops):
         return expr
     if sp.count_ops(expr) > max_ops:
@@ -113,12 +115,15 @@ def normal_form(expr: sp.Expr, max_ops: int = LIGHT_MAX_OPS) -> sp.Expr:
 
 
 def polish(expr: sp.Expr, level: Level) -> sp.Expr:
-    """For ``level="full"``: ``sympy.simplify`` on expressions of at most ``FULL_MAX_OPS``
-    operations, kept only when it has no more operations than ``expr``; else ``expr``."""
-    if level != "full" or expr.is_number or expr.is_Symbol or not _small(expr, FULL_MAX_OPS):
+    """For ``level="full"``: ``sympy.simplify`` on expressions of at most
+    :data:`symmech.budget.FULL_SIMPLIFY_OPS` operations, kept only when it has no more
+    operations than ``expr``; else ``expr``."""
+    if level != "full" or expr.is_number or expr.is_Symbol:
+        return expr
+    if not _small(expr, limits.FULL_SIMPLIFY_OPS):
         return expr
     ops = sp.count_ops(expr)
-    if ops > FULL_MAX_OPS:
+    if ops > limits.FULL_SIMPLIFY_OPS:
         return expr
     simpler = sp.simplify(expr)
     return simpler if sp.count_ops(simpler) <= ops else expr

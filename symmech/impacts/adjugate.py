@@ -27,12 +27,13 @@ P(Y^A), C^AB, C_AB, beta^B and N):
 Cost.  Determinants and adjugates are formed by sympy's division-free characteristic
 polynomial route (``DomainMatrix.adj_det``); the only gcds are the final ones, entry by
 entry against the shared denominator, and they are taken only when the denominator has at
-most :data:`GCD_MAX_TERMS` terms and the numerator at most :data:`NUM_MAX_TERMS`
+most :data:`symmech.budget.IMPACT_GCD_TERMS` terms and the numerator at most
+:data:`symmech.budget.IMPACT_GCD_NUMERATOR_TERMS`
 (otherwise only the common monomial and integer content are cancelled: the entry stays
 exact, a fraction over the shared denominator).  When a polynomial grows beyond
-:data:`TERM_BUDGET` terms the route gives up (``None``) and the caller uses plain sympy
-arithmetic.  Whenever every final gcd is taken, each entry is the cancelled fraction of K,
-the same canonical element the fraction-field route produces.
+:data:`symmech.budget.IMPACT_TERMS` terms the route gives up (``None``) and the caller uses
+plain sympy arithmetic. Whenever every final gcd is taken, each entry is the cancelled
+fraction of K, the same canonical element the fraction-field route produces.
 
 Every identity used here is checked in ``tests/test_impacts_cost.py`` against the
 fraction-field route and the KKT route.
@@ -46,30 +47,18 @@ from typing import Any
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
+from symmech import budget as limits
+from symmech.budget import BudgetExceeded
 from symmech.errors import ImpactError
 from symmech.geometry.field import RationalField, common_domain
 
 __all__ = [
-    "GCD_MAX_TERMS",
-    "NUM_MAX_TERMS",
-    "TERM_BUDGET",
     "Denominators",
     "adjugate_route",
     "shared_denominators",
 ]
 
-#: Final gcds are taken only against shared denominators with at most this many terms.
-GCD_MAX_TERMS = 400
-#: ... and only for numerators with at most this many terms.
-NUM_MAX_TERMS = 6000
-#: The route gives up when a polynomial it forms has more terms than this.
-TERM_BUDGET = 200_000
-
 Poly = Any  # a PolyElement of the ring R
-
-
-class BudgetExceeded(Exception):
-    """A polynomial formed by the route has more than :data:`TERM_BUDGET` terms."""
 
 
 class Denominators:
@@ -91,8 +80,15 @@ def _guard(*items: Any) -> None:
     total = 0
     for item in items:
         total += _size(item) if isinstance(item, DomainMatrix) else len(item)
-    if total > TERM_BUDGET:
-        raise BudgetExceeded(f"intermediate polynomials hold {total} terms")
+    limits.checkpoint()
+    if total > limits.IMPACT_TERMS:
+        raise BudgetExceeded(
+            "impact projectors (adjugate route)",
+            "IMPACT_TERMS",
+            "terms",
+            limits.IMPACT_TERMS,
+            total,
+        )
 
 
 def _exquo_all(M: DomainMatrix, d: Poly) -> DomainMatrix | None:
@@ -120,7 +116,11 @@ def _fraction(field: Any, num: Poly, den: Poly, cancel: bool) -> Any:
     the module docstring), else with the common monomial and content removed."""
     if not num:
         return field.zero
-    if cancel and len(den) <= GCD_MAX_TERMS and len(num) <= NUM_MAX_TERMS:
+    if (
+        cancel
+        and len(den) <= limits.IMPACT_GCD_TERMS
+        and len(num) <= limits.IMPACT_GCD_NUMERATOR_TERMS
+    ):
         return field.new(num, den)
     mono = tuple(min(e) for e in zip(*num.monoms(), *den.monoms(), strict=True))
     ring = num.ring
@@ -151,7 +151,8 @@ def adjugate_route(
         return None
     try:
         return _route(field, g, mu, dpsi, nu, check, cancel)
-    except BudgetExceeded:
+    except BudgetExceeded as exc:
+        limits.propagate_time(exc)
         return None
 
 
@@ -229,7 +230,8 @@ def shared_denominators(
     try:
         core = _Core(field, g, mu, dpsi, nu)
         return core.denominators(core.gram_inverse()[1])
-    except BudgetExceeded:
+    except BudgetExceeded as exc:
+        limits.propagate_time(exc)
         return None
 
 

@@ -35,10 +35,11 @@ undecided the general Theorem 3.9/4.3 is used, which is valid in every case.
 
 Deciding "the residual is identically zero", by cost (:attr:`CarnotResult.route`):
 
-* ``"fraction field"``: when the map is small (at most :data:`FIELD_MAX_OPS` operations
-  in the matrices involved), the residual is formed in the fraction field of the entries
-  (:mod:`symmech.impacts.quadratic`), each velocity coefficient cancelled (small ones
-  also simplified, for trigonometric relations): a proof;
+* ``"fraction field"``: when the map is small (at most
+  :data:`symmech.budget.CARNOT_FIELD_OPS` operations in the matrices involved), the
+  residual is formed in the fraction field of the entries (:mod:`symmech.impacts.quadratic`),
+  each velocity coefficient cancelled (small ones also simplified, for trigonometric
+  relations): a proof;
 * ``"exact evaluation"``: otherwise the residual, multiplied by ``1 + alpha``, is
   evaluated exactly in rational arithmetic at a random point, with a degree bound
   (:mod:`symmech.impacts.identity`, Schwartz-Zippel: the probability of a wrong "holds"
@@ -58,16 +59,13 @@ from typing import Any
 
 import sympy as sp
 
+from symmech import budget as limits
 from symmech.declaration.latex import latex_text
 from symmech.impacts.identity import Unsupported, identically_zero
 from symmech.impacts.projectors import ImpactProjectors
 from symmech.impacts.quadratic import Affine, QuadraticForm, common_domain
 
-__all__ = ["FIELD_MAX_OPS", "CarnotResult", "carnot_residual"]
-
-#: Maps with at most this many operations (matrix, offset, W, PP, T~, P, g) are decided in
-#: the fraction field; larger ones by exact evaluation.
-FIELD_MAX_OPS = 3000
+__all__ = ["CarnotResult", "carnot_residual"]
 
 Formed = tuple[sp.Expr, dict[str, sp.Expr], sp.ImmutableMatrix]
 
@@ -227,7 +225,7 @@ def carnot_residual(
     def symbolic() -> Formed:
         return _symbolic(setup)
 
-    if _size([proj.g, proj.P, proj.PP, proj.T, matrix, offset, W]) <= FIELD_MAX_OPS:
+    if _size([proj.g, proj.P, proj.PP, proj.T, matrix, offset, W]) <= limits.CARNOT_FIELD_OPS:
         formed = symbolic()
         if formed[0] == 0:
             return CarnotResult(

@@ -34,6 +34,7 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
+from symmech import budget as limits
 from symmech.declaration.wallpoints import points_on_wall
 from symmech.errors import ImpactError
 from symmech.impacts.adjugate import shared_denominators
@@ -51,7 +52,7 @@ __all__ = [
     "singular_set",
 ]
 
-_SYMBOLIC_OPS = 200
+_SYMBOLIC_OPS = limits.ZERO_TEST_OPS
 
 
 @dataclass(frozen=True)
@@ -284,7 +285,7 @@ def _check_on_the_wall(
 
 #: Expressions with more operations than this are not factored (kept whole) and closed
 #: forms with more are not scanned for denominators (see :func:`singular_set`).
-FACTOR_MAX_OPS = 400
+FACTOR_MAX_OPS = limits.SINGULAR_FACTOR_OPS
 
 Description = str | Callable[[sp.Expr], str]
 

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Literal
 
 import sympy as sp
 
+from symmech import budget as limits
 from symmech.declaration.latex import latex_text
 from symmech.declaration.sampling import sample_points
 from symmech.declaration.symbols import t as TIME
@@ -309,7 +310,7 @@ def _is_identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
         value = sp.N(expr.subs(point), 30)
         if not value.is_number or abs(complex(value)) > 1e-20:
             return False
-    if sp.count_ops(expr) <= 200:
+    if sp.count_ops(expr) <= limits.ZERO_TEST_OPS:
         simple = sp.simplify(expr)
         return simple == 0 or not simple.is_number
     return True
@@ -419,7 +420,7 @@ def derive_impact_map(
     state = (*q, TIME)
 
     def finish(e: sp.Expr) -> sp.Expr:
-        if simplify == "full" and sp.count_ops(e) <= 150:
+        if simplify == "full" and sp.count_ops(e) <= limits.IMPACT_FULL_OPS:
             e = sp.simplify(e)
         return stable_coefficient(e, state)
 

@@ -18,11 +18,10 @@ from __future__ import annotations
 
 import sympy as sp
 
+from symmech import budget as limits
 from symmech.geometry.field import RationalField, common_domain
 
 __all__ = ["Affine", "QuadraticForm", "common_domain"]
-
-_SIMPLIFY_MAX_OPS = 300
 
 
 class Affine:
@@ -120,6 +119,6 @@ def _clean(e: sp.Expr, simplify: bool) -> sp.Expr:
             or any(p.exp.is_Rational and not p.exp.is_Integer for p in e.atoms(sp.Pow))
         )
     ):
-        if sp.count_ops(e) <= _SIMPLIFY_MAX_OPS:
+        if sp.count_ops(e) <= limits.QUADRATIC_SIMPLIFY_OPS:
             e = sp.simplify(e)
     return sp.factor_terms(e)

@@ -21,8 +21,8 @@ The stabilising step implemented here is:
    :func:`symmech.impacts.energy_law`), a sum of non-negative terms which cannot cancel
    and is never negative in floating point.
 
-Expressions above :data:`STABLE_MAX_OPS` operations are left as they are (the cost of
-``factor`` grows quickly); this mirrors :mod:`symmech.geometry.simplification`.
+Expressions above :data:`symmech.budget.STABLE_OPS` operations are left as they are (the
+cost of ``factor`` grows quickly); this mirrors :mod:`symmech.geometry.simplification`.
 """
 
 from __future__ import annotations
@@ -31,10 +31,9 @@ from collections.abc import Iterable, Sequence
 
 import sympy as sp
 
-__all__ = ["STABLE_MAX_OPS", "stable_coefficient", "stable_linear", "stable_matrix"]
+from symmech import budget as limits
 
-#: Coefficients with more operations than this are cancelled but not factored.
-STABLE_MAX_OPS = 600
+__all__ = ["stable_coefficient", "stable_linear", "stable_matrix"]
 
 
 def _state_generators(expr: sp.Expr, state: frozenset) -> list[sp.Expr]:
@@ -88,8 +87,10 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     keeps numerator and denominator as products.  An irreducible factor that involves the
     ``state`` (coordinates, time) is written as a sum over its state monomials with
     factored parameter coefficients, so ``I + m (a^4 - 2 a^2 b^2 + b^4) sin^2`` becomes
-    ``I + m (a - b)^2 (a + b)^2 sin^2`` (no cancellation when a ~ b).  Expressions with more
-    than :data:`STABLE_MAX_OPS` operations are returned unchanged.
+    ``I + m (a - b)^2 (a + b)^2 sin^2`` (no cancellation when a ~ b).  Returned unchanged:
+    expressions already in that form (a cheap structural test, :func:`_already_stable`),
+    and those over the budgets :data:`symmech.budget.STABLE_OPS` (operations) or
+    :data:`symmech.budget.STABLE_TERMS` (terms of their expansion).
 
     >>> import sympy as sp
     >>> I, m, R = sp.symbols("I m R", positive=True)
@@ -100,7 +101,10 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     expr = sp.sympify(expr)
     if expr.is_number or expr.is_Symbol:
         return sp.nsimplify(expr) if isinstance(expr, sp.Float) else expr
-    if sp.count_ops(expr) > STABLE_MAX_OPS:
+    if sp.count_ops(expr) > limits.STABLE_OPS:
+        return expr
+    st = frozenset(state)
+    if _already_stable(expr, st) or limits.expanded_terms(expr)[0] > limits.STABLE_TERMS:
         return expr
     c = sp.cancel(sp.together(expr))
     num, den = sp.fraction(c)
@@ -108,8 +112,48 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
         num, den = sp.factor(num), sp.factor(den)
     except sp.PolynomialError:  # pragma: no cover - factor refuses some exotic generators
         return c
-    st = frozenset(state)
     return _refactor(num, st) / _refactor(den, st)
+
+
+def _linear(e: sp.Expr) -> bool:
+    """A sum of distinct symbols with numeric coefficients (and a constant): degree one,
+    hence irreducible."""
+    for term in e.args:
+        _, rest = term.as_coeff_Mul()
+        if not (rest.is_Symbol or rest == 1):
+            return False
+    return True
+
+
+def _already_stable(expr: sp.Expr, state: frozenset) -> bool:
+    """True when ``expr`` is already in the form the stabilising step produces, decided on
+    its tree without any polynomial arithmetic: a sum of terms whose state monomials
+    differ, or whose coefficients on a shared state monomial form a linear sum of
+    distinct symbols (nothing to combine or factor), each term the product of a number,
+    positive integer powers of symbols, of state generators (state symbols, functions of
+    the state) and of linear sums of symbols free of the state (irreducible: ``factor``
+    returns them unchanged), with no denominator.  ``cancel`` and ``factor`` would return
+    such an expression unchanged up to the order of its factors; the test costs one walk
+    over the top two levels of the tree."""
+    groups: dict[sp.Expr, list[sp.Expr]] = {}
+    for term in sp.Add.make_args(expr):
+        monomial = []
+        for factor in sp.Mul.make_args(term):
+            if factor.is_Number:
+                continue
+            base, exp = factor.as_base_exp()
+            if not (exp.is_Integer and exp > 0):
+                return False
+            if base.free_symbols & state:
+                if base.is_Add or base.is_Mul:
+                    return False
+                monomial.append(factor)
+            elif not (base.is_Symbol or (base.is_Add and _linear(base))):
+                return False
+        key = sp.Mul(*monomial)
+        groups.setdefault(key, []).append(term / key)
+    # terms sharing a state monomial: their coefficients must form a linear sum
+    return all(len(c) == 1 or _linear(sp.Add(*c)) for c in groups.values())
 
 
 def stable_linear(
