@@ -100,14 +100,15 @@ def generate(
     constants: Mapping | None = None,
     definitions: Mapping | None = None,
     projectors: bool = False,
+    jacobian: bool = False,
     cse: bool = True,
 ) -> GeneratedCode:
     """Generate ``target`` (``"c"`` or ``"numpy"``) code for ``scene``.
 
     See :func:`symmech.codegen.plan.build_plan` for ``strategy``, ``functions``,
     ``constants`` (parameters baked in and folded), ``definitions`` (expressions for
-    arbitrary functions of time) and ``projectors``.  ``cse=False`` prints the expressions
-    without common-subexpression elimination (for comparisons).
+    arbitrary functions of time), ``projectors`` and ``jacobian``.  ``cse=False`` prints
+    the expressions without common-subexpression elimination (for comparisons).
     """
     if target not in BACKENDS:
         raise CodegenError(f"target must be one of {sorted(BACKENDS)}, got {target!r}")
@@ -119,6 +120,7 @@ def generate(
         constants=constants,
         definitions=definitions,
         projectors=projectors,
+        jacobian=jacobian,
     )
     plan = _with_metric_checks(scene, plan, constants, definitions)
     rules = _parameter_rules(scene, plan)
@@ -232,7 +234,7 @@ def _argument_notes(plan: ScenePlan, lowered: Sequence[LoweredFunction]) -> list
 
 
 #: Closed forms that hold the inverse metric: their metric is checked at run time.
-METRIC_KINDS = ("acceleration", "multipliers", "impact", "projectors")
+METRIC_KINDS = ("acceleration", "multipliers", "impact", "projectors", "jacobian")
 
 
 def _with_metric_checks(

@@ -89,6 +89,7 @@ FUNCTIONS = (
     "psi_t",
     "impact",
     "projectors",
+    "jacobian",
 )
 
 #: Name prefixes of the per-wall functions, by kind: prefix-free (module docstring).
@@ -313,6 +314,7 @@ def build_plan(
     constants: Mapping | None = None,
     definitions: Mapping | None = None,
     projectors: bool = False,
+    jacobian: bool = False,
 ) -> ScenePlan:
     """The :class:`ScenePlan` of ``scene`` (see the module docstring).
 
@@ -333,7 +335,8 @@ def build_plan(
     emitted (names from :data:`FUNCTIONS`).  ``constants`` bakes parameter values in
     (folded into the expressions); the other parameters are run-time inputs ``p``.
     ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
-    t and the parameters.  ``projectors`` adds P and Q (constrained scenes).
+    t and the parameters.  ``projectors`` adds P and Q (constrained scenes); ``jacobian``
+    adds the Jacobian d(rhs)/dy of the first-order system (for implicit integrators).
     """
     if strategy not in STRATEGIES:
         raise CodegenError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
@@ -345,6 +348,10 @@ def build_plan(
         wanted.add("projectors")
     elif functions is None:
         wanted.discard("projectors")
+    if jacobian:
+        wanted.add("jacobian")
+    elif functions is None:
+        wanted.discard("jacobian")
     options = (wanted, constants or {}, definitions or {})
     if strategy == "linear_solve" or (strategy == "auto" and scene.n > limits.CLOSED_FORM_MAX_N):
         return _build(scene, "linear_solve", *options)
@@ -547,6 +554,20 @@ def _build(
             (2 * n,),
             calls="acceleration",
         )
+    if "jacobian" in wanted:
+        jac = _jacobian(scene)
+        if isinstance(jac, str):
+            omitted.append(jac)
+        else:
+            add(
+                "jacobian",
+                "jacobian",
+                "Jacobian d(y_dot)/dy of the first-order system y = (q, v) (closed form)",
+                "J = d(S(q) v, v_dot(q, v))/d(q, v), v_dot the closed-form acceleration",
+                ("y",),
+                [_matrix_block("out", jac)],
+                (2 * n, 2 * n),
+            )
     if "acceleration" not in wanted and need_acc:
         # rhs needs it: keep it, but say so
         omitted.append("acceleration was not asked for but is emitted: rhs calls it")
@@ -748,6 +769,19 @@ def _energy_law_map(scene: Scene, wall) -> object:
             return scene.impact_map(wall.index)
     except BudgetExceeded as exc:
         raise CodegenError(f"{exc}; the energy law has no linear_solve form") from None
+
+
+def _jacobian(scene: Scene) -> sp.Matrix | str:
+    """``d(S(q) v, v_dot)/d(q, v)`` from the closed-form acceleration (Carnot paper eq. 5),
+    derived within :data:`symmech.budget.CLOSED_FORM_SECONDS`; over budget, the note that
+    says why it is left out."""
+    stage = f"Jacobian of scene {scene.name!r}"
+    try:
+        with limits.time_limit(stage, limits.CLOSED_FORM_SECONDS):
+            ydot = sp.Matrix(scene.kinematics()).col_join(sp.Matrix(scene.acceleration()))
+            return ydot.jacobian(list(scene.coordinates) + list(scene.velocities))
+    except BudgetExceeded as exc:
+        return f"jacobian: {exc}; not emitted (implicit methods then need another Jacobian)"
 
 
 def _forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[str]:
