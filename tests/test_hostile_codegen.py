@@ -275,6 +275,8 @@ CODE = {
     "size",
     "loop",
     "fn.name",
+    "fn.scaled",
+    "velocity",  # a macro argument: "v" or "w"
     "fn.sizes",
     "fn.parameters",
     "fn.dims",

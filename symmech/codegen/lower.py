@@ -35,6 +35,12 @@ its entries are checked finite and its Cholesky pivots positive, unrolled as for
 metric that the run-time parameters or the state make indefinite is never inverted
 silently (``metric_check``).
 
+The impact map of a static wall is linear in v (homogeneous of degree 1 for the energy
+law), so it is evaluated scale-invariantly (``scaled``): for ``w = v 2^-e`` with
+``2^(e-1) <= max|v_i| < 2^e`` and scaled back by ``2^e``, exact powers of two, so a tiny or
+huge speed never under- or overflows in an intermediate (a moving wall's map is affine in
+v, with the term of ``psi_t``, and is evaluated as it is).
+
 The steps are unrolled at generation time into straight-line code over the entries that
 are not exact constants (:mod:`symmech.codegen.unroll`: same operations in the same order
 as the loop algorithms, minus those whose result IEEE arithmetic fixes in advance, such as
@@ -121,6 +127,7 @@ class LoweredFunction:
     cost: str = ""  # the header's cost line: operations, temporaries, solve, call
     expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
     metric_check: bool = False  # the closed form's metric is checked positive definite
+    scaled: bool = False  # evaluated for v / 2^e and scaled back (a static wall's impact)
 
     @property
     def one_state_fast(self) -> bool:
@@ -442,4 +449,5 @@ def lower(
         cost=cost + ".",
         expressions=tuple(e for _, e in replacements) + tuple(final),
         metric_check=check,
+        scaled=f.kind == "impact" and not plan.moving_walls[f.wall_index or 0],
     )

@@ -225,9 +225,13 @@ long symmech_carnot_3_7_dpsi_rough_wall_batch(long count, const double *q, doubl
  *   v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)
  * Operations after CSE: 15 (sympy.count_ops); temporaries: 5; metric check: 0 flops.
  * Then a check that the metric g is positive definite (its Cholesky pivots, unrolled).
+ * Scale-invariant in v (the map is linear in v, or of degree 1 for the energy law):
+ * evaluated by sm_unscaled_impact_rough_wall for w = v 2^-e, 2^(e-1) <= max_i |v_i| < 2^e,
+ * and scaled back by 2^e (exact powers of two), so that no intermediate under- or
+ * overflows at tiny or huge speeds.
  * Output: 3 doubles.
  */
-int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const double *p, double *out)
+static int sm_unscaled_impact_rough_wall(const double *q, const double *v, const double *p, double *out)
 {
     (void)q;
     const double v_xdot = v[0];
@@ -252,6 +256,26 @@ int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const
     if (!(M0_0 > 0.0)) return SYMMECH_NOT_SPD;
     if (!(M1_1 > 0.0)) return SYMMECH_NOT_SPD;
     if (!(M2_2 > 0.0)) return SYMMECH_NOT_SPD;
+    return sm_check_finite(3, out);
+}
+
+int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const double *p, double *out)
+{
+    double scale = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double a = fabs(v[i]);
+        if (a > scale) scale = a;
+    }
+    if (!(scale > 0.0 && isfinite(scale))) {
+        return sm_unscaled_impact_rough_wall(q, v, p, out);
+    }
+    int e;
+    (void)frexp(scale, &e);
+    double w[3];
+    for (int i = 0; i < 3; ++i) w[i] = ldexp(v[i], -e);
+    const int status = sm_unscaled_impact_rough_wall(q, w, p, out);
+    if (status != SYMMECH_OK) return status;
+    for (int i = 0; i < 3; ++i) out[i] = ldexp(out[i], e);
     return sm_check_finite(3, out);
 }
 

@@ -203,7 +203,7 @@ def dpsi_rough_wall(q):
     return out
 
 
-def impact_rough_wall(q, v, p):
+def _unscaled_impact_rough_wall(q, v, p):
     """post-impact velocity at wall 'rough_wall' (newton law, closed form).
 
     v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)
@@ -241,3 +241,18 @@ def impact_rough_wall(q, v, p):
     if not numpy.all(M2_2 > 0.0):
         raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
     return out
+
+
+def impact_rough_wall(q, v, p):
+    """post-impact velocity at wall 'rough_wall' (newton law, closed form): scale-invariant in v.
+
+    The map is linear in v (of degree 1 for the energy law): _unscaled_impact_rough_wall is
+    evaluated for w = v 2^-e, 2^(e-1) <= max_i |v_i| < 2^e, and the result scaled back by
+    2^e (exact powers of two), so that no intermediate under- or overflows at tiny or huge
+    speeds.
+    """
+    v = numpy.asarray(v, dtype=numpy.float64)
+    scale = numpy.max(numpy.abs(v), axis=-1, keepdims=True)
+    e = numpy.frexp(numpy.where((scale > 0.0) & numpy.isfinite(scale), scale, 1.0))[1]
+    out = _unscaled_impact_rough_wall(q, numpy.ldexp(v, -e), p)
+    return numpy.ldexp(out, e)
