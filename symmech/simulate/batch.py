@@ -42,6 +42,9 @@ __all__ = ["BatchResult", "simulate_batch"]
 class BatchResult:
     """Final states and counts of N runs (row i: the run from ``Q0[i], V0[i]``).
 
+    ``t``, ``q``, ``v`` are each run's last output sample (``res.t[-1]``, ``res.q[-1]``,
+    ``res.v[-1]`` of the single run: at a stop inside an event, the state before it).
+
     ``status`` holds indices into :data:`~symmech.simulate.result.STATUSES`
     (``statuses`` gives the names); ``events[:, k]`` counts the events of kind
     ``EVENT_KINDS[k]`` (impact, grazing, contact, release); ``accumulation_time`` is NaN

@@ -16,11 +16,13 @@ cached by content (:func:`symmech.codegen.build.compile_library`) and, once load
 system object.  A scene generated for its equations alone (:func:`symmech.codegen.generate`)
 gets no simulator code: only this module renders the template.
 
-A run allocates its work arrays once (``new``) and writes its accepted steps, Hermite
+A run allocates its work arrays once (``new``) and writes its accepted steps, dense-output
 segments and events into buffers given by the caller; when they run short the C loop
 pauses at the top of an iteration and :func:`run_c` continues it into fresh ones, so a
-run's length is bounded by memory only.  The continuous output of the C backend is the
-cubic Hermite interpolant through each step's ends and their derivatives.
+run's length is bounded by memory only.  The continuous output of the C backend is each
+step's own dense output (tsit5, rk45, DOP853 where its dense stages were made) or the cubic
+Hermite interpolant through the step's ends and their derivatives (rk4, and DOP853 steps
+with no event function to sample: a scene without walls).
 """
 
 from __future__ import annotations
@@ -37,7 +39,7 @@ from symmech.codegen.backends import environment, templates_used
 from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
 from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
-from symmech.simulate.hybrid import Options
+from symmech.simulate.hybrid import COND_LIMIT, Options
 from symmech.simulate.result import EVENT_KINDS, STATUSES, Event, SimulationResult
 from symmech.simulate.steppers import c_tableau, stepper
 from symmech.simulate.system import Functions, HybridSystem, SimulationError, contact_rows
@@ -48,10 +50,10 @@ __all__ = ["C_METHODS", "CLibrary", "SimulatorSpec", "library", "run_c", "simula
 C_METHODS = ("dop853", "tsit5", "rk45", "rk4")
 
 #: Entries of a run's info row before the state (see the template's ``info``).
-INFO_HEAD = 22
+INFO_HEAD = 23
 # statuses and reasons of the template (enum ST_*, R_*)
 _STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed"}
-_R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL = range(1, 10)
+_R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL, _R_COND = range(1, 11)
 _FUNCTIONS = ("psi", "dpsi", "psi_t", "impact", "energy", "projector_P", "constraint_residual")
 _FUNCTIONS += ("multipliers",)
 _WALL_KINDS = ("psi", "dpsi", "psi_t", "impact")
@@ -73,6 +75,8 @@ class SimulatorSpec:
     moving: tuple[int, ...]
     locked: tuple[int, ...]
     normal_index: int
+    m: int
+    has_frame: int
     calls: dict[str, Any]
     parameter_layout: tuple[tuple[str, ...], ...]
 
@@ -142,7 +146,9 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
     qv = {"q": "q", "v": "v", "y": "y", "t": "t"}
     rhs = [(-1, _call(free, "rhs", {**qv, "out": "out"}, 0))]
     projector, residual, force = [], [], []
+    mass_matrix = ""
     if fns.constrained:
+        mass_matrix = _call(free, "mass_matrix", {**qv, "out": "out"}, 0)
         projector.append((-1, _call(free, "projector_P", {**qv, "out": "out"}, 0)))
         r_out = {f.name: f.out_size for f in free.code.functions}["constraint_residual"]
         residual.append((-1, r_out, _call(free, "constraint_residual", {**qv, "out": "out"}, 0)))
@@ -183,10 +189,13 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         moving=moving,
         locked=locked,
         normal_index=system.normal_index(0) if walls else 0,
+        m=scene.constraint_matrix.rows,
+        has_frame=int(scene.declaration.frame is not None),
         calls={
             "rhs": rhs,
             "wall": wall_calls,
             "energy": _call(free, "energy", {**qv, "out": "out"}, 0),
+            "mass_matrix": mass_matrix,
             "projector": projector,
             "residual": residual,
             "force": force,
@@ -253,6 +262,9 @@ def simulator_source(system: HybridSystem) -> dict[str, str]:
             moving=spec.moving,
             locked=spec.locked,
             normal_index=spec.normal_index,
+            m=spec.m,
+            has_frame=spec.has_frame,
+            cond_limit=repr(COND_LIMIT),
             calls=spec.calls,
             methods=C_METHODS,
             tableaux=_tableaux(),
@@ -395,33 +407,60 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
         return status, f"step size {d[0]:.3g} too small at t = {d[1]!r}", None
     if reason == _R_FIXED:
         return status, f"non-finite state after a fixed step at t = {d[0]!r}", None
+    if reason == _R_COND:
+        return (
+            status,
+            f"wall {names[wall]!r} is nearly dependent on the constraints at"
+            f" t = {d[0]!r}: the impact's Gram matrix has condition number"
+            f" {d[1]:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
+            None,
+        )
     if reason == _R_CALL:
         name = _FUNCTIONS[fn] if 0 <= fn < len(_FUNCTIONS) else "a generated function"
         return status, f"the generated function {name} failed at t = {d[0]!r}", None
     return "failed", f"the C loop ended without a status (reason {reason})", None
 
 
-class _Hermite:
-    """The cubic Hermite interpolant of ``y0, f0, y1, f1`` on ``[t0, t1]`` (absolute time)."""
+class _Dense:
+    """The continuous output of one C step on ``[t0, t1]`` (absolute time), the step of
+    size ``h`` starting at ``t0``: the method's own dense output (type 1: ``y0 + theta (Q0
+    + theta (Q1 + theta (Q2 + theta Q3)))``, tsit5 and rk45; type 2: DOP853's
+    ``y0 + theta (F0 + (1 - theta)(F1 + theta (F2 + ...)))``, HNW I, II.10), or (type 0:
+    rk4, and DOP853 steps whose dense stages were never needed) the cubic Hermite
+    interpolant of ``y0, f0, y1, f1``."""
 
-    __slots__ = ("f0", "f1", "t0", "t1", "y0", "y1")
+    __slots__ = ("c", "h", "kind", "t0", "t1", "y0")
 
     def __init__(self, row: np.ndarray, size: int):
-        self.t0, self.t1 = float(row[0]), float(row[1])
-        parts = [row[2 + k * size : 2 + (k + 1) * size] for k in range(4)]
-        self.y0, self.f0, self.y1, self.f1 = parts
+        self.t0, self.t1, self.h, self.kind = (
+            float(row[0]),
+            float(row[1]),
+            float(row[2]),
+            int(row[3]),
+        )
+        self.y0 = row[4 : 4 + size]
+        self.c = row[4 + size :].reshape(7, size)
 
     def __call__(self, t: float) -> np.ndarray:
-        h = self.t1 - self.t0
-        if h == 0:
-            return self.y1.copy()
-        s = (t - self.t0) / h
+        s = (t - self.t0) / self.h
         s1 = 1 - s
+        c = self.c
+        if self.kind == 1:
+            acc = c[3]
+            for r in (2, 1, 0):
+                acc = acc * s + c[r]
+            return self.y0 + s * acc
+        if self.kind == 2:
+            acc = c[6]
+            for r in range(5, -1, -1):
+                acc = c[r] + (s1 if r % 2 == 0 else s) * acc
+            return self.y0 + s * acc
+        h = self.h
         return (
             (1 + 2 * s) * s1 * s1 * self.y0
-            + s * s1 * s1 * h * self.f0
-            + s * s * (3 - 2 * s) * self.y1
-            + s * s * (s - 1) * h * self.f1
+            + s * s1 * s1 * h * c[0]
+            + s * s * (3 - 2 * s) * c[1]
+            + s * s * (s - 1) * h * c[2]
         )
 
 
@@ -457,7 +496,7 @@ def run_c(
         lib.begin(handle, t0, y.ctypes.data)
         while True:
             rec = np.empty((rec_cap, ny + 1))
-            seg = np.empty((rec_cap, 2 + 4 * ny))
+            seg = np.empty((rec_cap, 4 + 8 * ny))
             ev = np.empty((ev_cap, 3 + 3 * n))
             evi = np.empty((ev_cap, 2), dtype=np.intc)
             paused = lib.run(
@@ -500,7 +539,7 @@ def run_c(
         )
         for row, ids in zip(ev_all, evi_all, strict=True)
     ]
-    segments = [(float(r[0]), float(r[1]), _Hermite(r, ny)) for part in segs for r in part]
+    segments = [(float(r[0]), float(r[1]), _Dense(r, ny)) for part in segs for r in part]
     stats = {
         "steps": int(info[11]),
         "rejected_steps": int(info[12]),
@@ -508,6 +547,7 @@ def run_c(
         "jacobian_calls": 0,
         "wall_time": _time.perf_counter() - clock,
         "constraint_drift": float(info[14]),
+        "impact_condition": float(info[22]),
         "energy_drift": float(info[15]) if fns.energy_conserved else None,
         "impacts": int(info[17]),
         "grazing": int(info[18]),

@@ -100,7 +100,7 @@ typedef struct {
     double tf, h, st0, st1, sh;
     int have_h, rejected_last, dense_ready;
     /* run state */
-    double t, y[NY > 0 ? NY : 1];
+    double t, y[NY > 0 ? NY : 1], last_t, last_y[NY > 0 ? NY : 1];
     int mode, started;
     double hist[NW > 0 ? NW : 1][3];
     long nhist[NW > 0 ? NW : 1];
@@ -539,8 +539,11 @@ static void dense(sim_t *s, double tt, double *out)
 
 /* ---- output ---- */
 
+/* a sample of the output (t, y); the last one is kept in every mode (the final state) */
 static void record(sim_t *s)
 {
+    s->last_t = s->t;
+    memcpy(s->last_y, s->y, NY * sizeof(double));
     if (!s->record) return;
     double *r = s->rec + s->nrec * (NY + 1);
     r[0] = s->t;
@@ -889,10 +892,11 @@ static int enter_contact(sim_t *s, int w, double r, int why_here, double estimat
         s->d[2] = s->t;
         return stop(s, ST_ZENO, R_REST);
     }
-    double ym[NY];
-    memcpy(ym, s->y, sizeof ym);
-    stabilise(s, w, s->y, 0);
-    if (event(s, K_CONTACT, w, ym, s->y, r)) return 1;
+    double yp[NY];
+    memcpy(yp, s->y, sizeof yp);
+    stabilise(s, w, yp, 0);
+    if (event(s, K_CONTACT, w, s->y, yp, r)) return 1;
+    memcpy(s->y, yp, sizeof yp);
     s->mode = w;
     return 0;
 }
@@ -1143,7 +1147,7 @@ int symmech_bouncing_ball_sim_run(void *p, double *rec, long rec_cap, double *se
     s->rec_cap = rec_cap;
     s->seg_cap = seg_cap;
     s->ev_cap = ev_cap;
-    if (s->record && s->nrec == 0 && !s->started) record(s);
+    if (!s->started && s->nrec == 0) record(s);
     int paused = run(s);
     counts[0] = s->nrec;
     counts[1] = s->nseg;
@@ -1153,7 +1157,8 @@ int symmech_bouncing_ball_sim_run(void *p, double *rec, long rec_cap, double *se
 }
 
 /* status, reason, wall, why, sub, function, mode, d[4], steps, rejected, nfev, drift,
-   energy drift, events, impacts, grazing, contacts, releases, t, condition, y[NY] */
+   energy drift, events, impacts, grazing, contacts, releases, and the last sample of the
+   output (t, then after the condition number, y[NY]) */
 void symmech_bouncing_ball_sim_info(const void *p, double *out)
 {
     const sim_t *s = p;
@@ -1172,9 +1177,9 @@ void symmech_bouncing_ball_sim_info(const void *p, double *out)
     out[15] = s->energy_drift;
     out[16] = (double)s->events;
     for (int i = 0; i < 4; ++i) out[17 + i] = (double)s->counts[i];
-    out[21] = s->t;
+    out[21] = s->last_t;
     out[22] = s->condition;
-    for (int i = 0; i < NY; ++i) out[23 + i] = s->y[i];
+    for (int i = 0; i < NY; ++i) out[23 + i] = s->last_y[i];
 }
 
 /* N runs from the rows of Y0 (N x NY); info rows of 25 doubles per run.

@@ -1,0 +1,367 @@
+"""The C backend of the hybrid simulator (``backend="c"``) and ``simulate_batch``.
+
+The NumPy loop (:mod:`symmech.simulate.hybrid`) is the reference: on every scene the C
+loop must take the same decisions (same statuses, same event kinds on the same walls, the
+same messages) and land on the same states to a small multiple of the tolerance; where a
+closed form exists (the bouncing ball's impact and accumulation times, Newton's cradle's
+exchange of velocities, free flight) both are checked against it.  The generated C is
+compiled with ``-Wall -Wextra -Werror -pedantic``; the rendered simulator of the bouncing
+ball is a golden file (``pytest --update-golden`` refreshes it and prints the diff).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import subprocess
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import symmech as sm
+from symmech import Scene, Wall, coordinates
+from symmech.declaration.symbols import t as TIME
+from symmech.examples import (
+    bouncing_ball,
+    carnot_3_13,
+    disk_3_7_gravity,
+    ellipse_gravity,
+    newtons_cradle,
+    pendulum_on_cart,
+    pendulum_wall,
+)
+from symmech.simulate import SimulationError, simulate_batch, system_for
+from symmech.simulate.csim import C_METHODS, simulator_source
+from tests.codegen_support import require_c_compiler
+
+GOLDEN = Path(__file__).parent / "golden"
+STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic"]
+BALL = {"m": 1.0, "g": 9.81, "alpha": 0.5}
+ELLIPSE = {"m": 1, "I": 5 / 16, "a": 1, "b": 0.5, "g": 9.81, "alpha": 0.8}
+DISK = {"m": 1.0, "k": 0.5, "R": 1.0, "g": 9.81, "alpha": 0.5}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _compiler() -> None:
+    require_c_compiler()
+
+
+def both(scene: Scene, q0, v0, t_end: float, **kw):
+    """The NumPy and the C run of the same problem."""
+    return tuple(sm.simulate(scene, q0, v0, t_end, backend=b, **kw) for b in ("numpy", "c"))
+
+
+def assert_same_run(a, b, state_tol: float, time_tol: float) -> None:
+    """Same status, message form, event kinds and walls; states and times within tolerance."""
+    assert a.status == b.status
+    assert [(e.kind, e.wall) for e in a.events] == [(e.kind, e.wall) for e in b.events]
+    for ea, eb in zip(a.events, b.events, strict=True):
+        assert abs(ea.time - eb.time) <= time_tol, (ea, eb)
+        np.testing.assert_allclose(eb.v_plus, ea.v_plus, atol=state_tol, rtol=0)
+    np.testing.assert_allclose(b.y[-1], a.y[-1], atol=state_tol, rtol=0)
+    assert b.t[-1] == pytest.approx(a.t[-1], abs=time_tol)
+    assert set(a.stats) == set(b.stats)
+    for key in ("impacts", "grazing", "contacts", "releases"):
+        assert a.stats[key] == b.stats[key], key
+
+
+# ----------------------------------------------------------------------- bouncing ball
+
+
+def ball_impact_times(h: float, g: float, alpha: float, k: int) -> np.ndarray:
+    """t_1 = sqrt(2h/g), t_(j+1) = t_j + 2 alpha^j sqrt(2h/g) (dropped from rest at h)."""
+    t1 = math.sqrt(2 * h / g)
+    return t1 * (1 + 2 * np.concatenate([[0.0], np.cumsum(alpha ** np.arange(1, k))]))
+
+
+@pytest.mark.parametrize("method", ["dop853", "tsit5", "rk45"])
+def test_bouncing_ball_stop_matches_numpy_and_closed_forms(method):
+    a, b = both(bouncing_ball(), [1.0], [0.0], 3.0, params=BALL, method=method, contact="stop")
+    assert_same_run(a, b, state_tol=1e-7, time_tol=1e-9)
+    assert b.status == "zeno"
+    assert b.message.startswith("impacts on wall 'floor' accumulate at t* = ")
+    t_star = math.sqrt(2 / 9.81) * (1 + 0.5) / (1 - 0.5)
+    assert b.accumulation_time == pytest.approx(t_star, abs=1e-7)
+    times = np.array([e.time for e in b.impacts()])
+    np.testing.assert_allclose(times[:15], ball_impact_times(1.0, 9.81, 0.5, 15), atol=1e-9)
+
+
+def test_bouncing_ball_persistent_rests_on_the_floor():
+    a, b = both(bouncing_ball(), [1.0], [0.0], 3.0, params=BALL)
+    assert_same_run(a, b, state_tol=1e-9, time_tol=1e-9)
+    assert b.status == "finished" and b.message == "reached t_end = 3.0"
+    assert b.stats["contacts"] == 1 and b.events[-1].kind == "contact"
+    t_star = math.sqrt(2 / 9.81) * 3
+    assert b.events[-1].time == pytest.approx(t_star, abs=1e-7)
+    assert b.q[-1, 0] == 0.0 and b.v[-1, 0] == 0.0  # locked contact: the body rests
+    assert b.stats["steps"] == a.stats["steps"] and b.stats["rhs_calls"] == a.stats["rhs_calls"]
+
+
+def test_rk4_fixed_step_matches_numpy():
+    kw = {"params": BALL, "method": "rk4", "max_step": 1e-2, "contact": "stop"}
+    a, b = both(bouncing_ball(), [1.0], [0.0], 3.0, **kw)
+    assert_same_run(a, b, state_tol=1e-8, time_tol=1e-9)
+    assert b.stats["rejected_steps"] == 0
+    np.testing.assert_allclose(np.diff(b.t[:5]), 1e-2, rtol=1e-12)
+
+
+def test_dense_output_is_the_parabola_between_impacts():
+    res = sm.simulate(bouncing_ball(), [1.0], [0.0], 0.9, params=BALL, backend="c")
+    t1 = math.sqrt(2 / 9.81)
+    ts = np.linspace(0, 0.99 * t1, 17)
+    np.testing.assert_allclose(res.sol(ts)[:, 0], 1 - 9.81 * ts**2 / 2, atol=1e-12)
+    v1 = 0.5 * 9.81 * t1  # rebound speed
+    ts = np.linspace(1.01 * t1, 0.9, 11)
+    y = v1 * (ts - t1) - 9.81 * (ts - t1) ** 2 / 2
+    np.testing.assert_allclose(res.sol(ts)[:, 0], y, atol=1e-9)
+
+
+def test_thousands_of_elastic_bounces_grow_the_buffers():
+    """3000 elastic bounces: more events and steps than the first output buffers hold
+    (the C loop pauses and continues); impact times t_k = (2k - 1) sqrt(2h/g)."""
+    params = {"m": 1.0, "g": 9.81, "alpha": 1.0}
+    period = 2 * math.sqrt(2 / 9.81)
+    res = sm.simulate(
+        bouncing_ball(), [1.0], [0.0], 3000 * period, params=params, backend="c", rtol=1e-10
+    )
+    assert res.status == "finished"
+    assert res.stats["impacts"] == 3000
+    times = np.array([e.time for e in res.impacts()])
+    k = np.arange(1, 3001)
+    np.testing.assert_allclose(times, (2 * k - 1) * period / 2, rtol=1e-8)
+    assert len(res.t) > 1024 and len(res.t) == 1 + len(res.segments) + 3000
+    assert res.stats["energy_drift"] < 1e-8
+    assert np.all(np.diff(res.t) >= 0)
+
+
+# ------------------------------------------------------------------ the other scenes
+
+
+def test_ellipse_with_gravity_matches_numpy():
+    kw = {"params": ELLIPSE, "rtol": 1e-9}
+    a, b = both(ellipse_gravity(), [0, 1.5, 0.3], [0, 0, 2], 6.0, **kw)
+    assert b.status == a.status == "finished"
+    assert b.stats["impacts"] == a.stats["impacts"] > 20
+    assert b.stats["contacts"] == a.stats["contacts"] == 1
+    np.testing.assert_allclose(b.y[-1], a.y[-1], atol=1e-6)
+    ea, eb = a.impacts()[:20], b.impacts()[:20]
+    np.testing.assert_allclose([e.time for e in eb], [e.time for e in ea], atol=1e-8)
+    assert b.stats["energy_drift"] < 1e-6
+    ts = np.linspace(0, 3.5, 41)  # DOP853's own dense output (made for the event search)
+    np.testing.assert_allclose(b.sol(ts), a.sol(ts), atol=1e-7)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("method", ["tsit5", "rk45"])
+def test_ellipse_with_gravity_matches_numpy_each_method(method):
+    kw = {"params": ELLIPSE, "rtol": 1e-9, "method": method}
+    a, b = both(ellipse_gravity(), [0, 1.5, 0.3], [0, 0, 2], 6.0, **kw)
+    assert b.status == a.status == "finished"
+    np.testing.assert_allclose(b.y[-1], a.y[-1], atol=1e-6)
+    assert abs(b.stats["impacts"] - a.stats["impacts"]) <= 1
+
+
+@pytest.mark.parametrize("method", ["dop853", "tsit5", "rk45"])
+def test_newtons_cradle_passes_the_velocity_down_the_row(method):
+    a, b = both(
+        newtons_cradle(3), [0, 2, 4], [1, 0, 0], 2.0, params={"m": 1, "r": 1}, method=method
+    )
+    assert_same_run(a, b, state_tol=1e-12, time_tol=1e-12)
+    assert [e.kind for e in b.events] == ["impact", "impact"]
+    assert [e.wall for e in b.events] == [0, 1]
+    np.testing.assert_allclose(b.v[-1], [0, 0, 1], atol=1e-14)
+    np.testing.assert_allclose(b.q[-1], [0, 2, 6], atol=1e-12)
+
+
+@pytest.mark.parametrize("method", ["dop853", "tsit5", "rk45"])
+def test_disk_3_7_rolls_at_each_impact(method):
+    a, b = both(disk_3_7_gravity(), [0, 2, 0], [1, 0, 0], 3.0, params=DISK, method=method)
+    assert_same_run(a, b, state_tol=1e-8, time_tol=1e-8)
+    assert b.stats["impacts"] > 5 and b.stats["contacts"] == 1
+    for e in b.impacts():
+        assert e.v_plus[0] - 1.0 * e.v_plus[2] == pytest.approx(0, abs=1e-12)  # x_dot = R th_dot
+    # resting on the floor it rolls at constant speed: y = R, y_dot = 0, x_dot = R th_dot
+    assert b.q[-1, 1] == pytest.approx(1.0, abs=1e-9)
+    assert b.v[-1, 1] == pytest.approx(0.0, abs=1e-9)
+    assert b.v[-1, 0] == pytest.approx(b.v[-1, 2], abs=1e-9)
+
+
+def test_constrained_rolling_sphere_hits_its_wall():
+    """Carnot example 3.13: the constrained scene keeps v in D (projection after each step)."""
+    v0 = [-1, 0.5, 0, -0.5, -1, 0.3]
+    kw = {"params": {"k": 0.6, "r": 1.0, "alpha": 0.5}}
+    a, b = both(carnot_3_13(), [1, 0, 0, 0, 1, 0], v0, 2.0, **kw)
+    assert_same_run(a, b, state_tol=1e-8, time_tol=1e-9)
+    assert b.stats["impacts"] == 1
+    assert b.stats["constraint_drift"] < 1e-8
+    assert b.v[-1, 0] > 0  # bounced off x = 0
+
+
+def test_moving_wall_matches_numpy():
+    """A ball on an oscillating floor psi = y - A sin(w t) (psi_t in the normal rate, the
+    accumulation on a moving wall stops the run)."""
+    (y,) = coordinates("y")
+    m, g = sp.symbols("m g", positive=True)
+    wall = Wall(y - sp.sin(7 * TIME) / 20, restitution=sp.Rational(7, 10), name="shaker")
+    scene = Scene((y,), metric=sp.Matrix([[m]]), potential=m * g * y, walls=[wall], name="shaker")
+    a, b = both(scene, [0.5], [0.0], 4.0, params={"m": 1, "g": 9.81})
+    assert_same_run(a, b, state_tol=1e-6, time_tol=1e-8)
+    assert b.stats["impacts"] > 3
+    for e in b.impacts():  # d psi/dt = y_dot - (7/20) cos(7 t)
+        assert e.normal_speed == pytest.approx(
+            e.v_minus[0] - 0.35 * math.cos(7 * e.time), abs=1e-12
+        )
+        assert e.q[0] == pytest.approx(math.sin(7 * e.time) / 20, abs=1e-12)
+
+
+def test_pendulum_wall_and_a_scene_without_walls():
+    p = {"m": 1.0, "l": 1.0, "g": 9.81, "d": 0.5, "alpha": 0.9}
+    a, b = both(pendulum_wall(), [0.0], [3.0], 3.0, params=p)
+    assert_same_run(a, b, state_tol=1e-8, time_tol=1e-9)
+    assert b.stats["impacts"] >= 2
+    scene = pendulum_on_cart(1)
+    params = {str(s): 1.0 for s in scene.parameters}
+    a, b = both(scene, [0.0, 0.3], [0.0, 0.0], 2.0, params=params, method="tsit5")
+    assert a.status == b.status == "finished" and not b.events
+    np.testing.assert_allclose(b.y[-1], a.y[-1], atol=1e-8)
+    ts = np.linspace(0, 2, 23)
+    np.testing.assert_allclose(b.sol(ts), a.sol(ts), atol=1e-8)  # the same dense output
+
+
+# ------------------------------------------------------------------------------- batch
+
+
+def test_batch_equals_looping_simulate_bit_for_bit_and_threads_do_not_matter():
+    rng = np.random.default_rng(12)
+    N = 12
+    Q0 = np.column_stack([rng.uniform(-1, 1, N), rng.uniform(1, 2, N), rng.uniform(0, 3, N)])
+    V0 = rng.uniform(-2, 2, (N, 3))
+    kw = {"params": ELLIPSE, "rtol": 1e-7, "atol": 1e-9, "max_events": 58}
+    scene = ellipse_gravity()
+    one = simulate_batch(scene, Q0, V0, 5.0, threads=1, **kw)
+    two = simulate_batch(scene, Q0, V0, 5.0, threads=2, **kw)
+    assert {"finished", "max_events"} <= set(one.statuses) and one.events[:, 2].sum() > 3
+    for field in ("t", "q", "v", "status", "events", "steps"):
+        assert np.array_equal(getattr(one, field), getattr(two, field)), field
+    assert np.array_equal(one.accumulation_time, two.accumulation_time, equal_nan=True)
+    for i in range(N):
+        r = sm.simulate(scene, Q0[i], V0[i], 5.0, backend="c", **kw)
+        assert one.statuses[i] == r.status and one.messages[i] == r.message
+        assert np.array_equal(one.q[i], r.q[-1]) and np.array_equal(one.v[i], r.v[-1])
+        assert one.t[i] == r.t[-1]
+        counts = [r.stats[k] for k in ("impacts", "grazing", "contacts", "releases")]
+        assert one.events[i].tolist() == counts
+        assert one.steps[i] == r.stats["steps"]
+
+
+def test_batch_accumulation_times_of_the_bouncing_ball():
+    h = np.array([0.5, 1.0, 2.0, 3.0])
+    res = simulate_batch(
+        bouncing_ball(), h[:, None], np.zeros((4, 1)), 10.0, params=BALL, contact="stop"
+    )
+    assert res.statuses.tolist() == ["zeno"] * 4
+    np.testing.assert_allclose(res.accumulation_time, np.sqrt(2 * h / 9.81) * 3, atol=1e-7)
+    persistent = simulate_batch(bouncing_ball(), h[:, None], np.zeros((4, 1)), 10.0, params=BALL)
+    assert persistent.statuses.tolist() == ["finished"] * 4
+    assert np.all(persistent.events[:, 2] == 1) and np.all(np.isnan(persistent.accumulation_time))
+    assert np.all(persistent.q == 0) and np.all(persistent.t == 10.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"Q0": [[1.0, 2.0]]}, r"Q0: expected shape \(N, 1\)"),
+        ({"Q0": [[1.0], [np.nan]]}, r"Q0: row 1 is not finite"),
+        ({"Q0": [[1.0], [-1.0]]}, r"Q0 row 1 is on the wrong side of wall 'floor'"),
+        ({"V0": [[0.0]]}, r"Q0 and V0: 2 rows against 1 rows"),
+        ({"V0": [["a"], ["b"]]}, r"V0: expected real numbers"),
+        ({"t_end": 0.0}, r"t_end must be greater than t0"),
+        ({"rtol": 2.0}, r"rtol must lie in"),
+        ({"atol": -1.0}, r"atol: expected a finite positive number"),
+        ({"threads": 0}, r"threads must be a positive integer"),
+        ({"max_events": 0}, r"max_events must be a positive integer"),
+        ({"contact": "glue"}, r"contact must be one of"),
+        ({"method": "rodas4"}, r"method 'rodas4' is not available with backend='c'"),
+        ({"params": {"m": 1.0, "g": 9.81}}, r"params: missing \['alpha'\]"),
+        ({"params": {"m": 1.0, "g": 9.81, "alpha": 2.0}}, r"restitution"),
+    ],
+)
+def test_batch_bad_input_names_the_argument(kwargs, match):
+    args = {"Q0": [[1.0], [2.0]], "V0": [[0.0], [0.0]], "t_end": 1.0, "params": BALL}
+    args.update(kwargs)
+    Q0, V0, t_end = args.pop("Q0"), args.pop("V0"), args.pop("t_end")
+    with pytest.raises(SimulationError, match=match):
+        simulate_batch(bouncing_ball(), Q0, V0, t_end, **args)
+
+
+def test_simulate_c_refuses_a_method_it_does_not_run():
+    with pytest.raises(SimulationError, match="rodas4"):
+        sm.simulate(bouncing_ball(), [1.0], [0.0], 1.0, params=BALL, method="rodas4")
+    assert C_METHODS == ("dop853", "tsit5", "rk45", "rk4")
+
+
+def test_batch_does_not_modify_its_inputs():
+    Q0, V0 = np.array([[1.0]]), np.array([[0.0]])
+    simulate_batch(bouncing_ball(), Q0, V0, 0.1, params=BALL, threads=1)
+    assert Q0.tolist() == [[1.0]] and V0.tolist() == [[0.0]]
+
+
+# ------------------------------------------------------------------- generated C itself
+
+
+@pytest.mark.parametrize(
+    "make", [bouncing_ball, ellipse_gravity, carnot_3_13, lambda: pendulum_on_cart(1)]
+)
+def test_simulator_compiles_with_strict_warnings(tmp_path, make):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        files = simulator_source(system_for(make(), "c"))
+    for name, text in files.items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    (source,) = [name for name in files if name.endswith("_simulator.c")]
+    proc = subprocess.run(
+        [require_c_compiler(), *STRICT, "-c", source], cwd=tmp_path, capture_output=True, text=True
+    )
+    assert proc.returncode == 0, proc.stderr
+
+
+def test_equations_alone_get_no_simulator_code():
+    code = sm.codegen.generate(bouncing_ball(), "c")
+    assert not any("simulator" in name for name in code.files)
+    assert not any("sim_run" in text for text in code.files.values())
+
+
+def test_simulator_golden_file(request, capsys):
+    """The rendered simulator of the bouncing ball equals its golden file."""
+    files = simulator_source(system_for(bouncing_ball(), "c"))
+    folder = GOLDEN / "simulator_bouncing_ball"
+    name = "symmech_bouncing_ball_simulator.c"
+    text = files[name]
+    path = folder / name
+    old = path.read_text(encoding="utf-8") if path.is_file() else ""
+    if request.config.getoption("--update-golden"):
+        if old != text:
+            with capsys.disabled():
+                print("".join(difflib.unified_diff(old.splitlines(True), text.splitlines(True))))
+            folder.mkdir(parents=True, exist_ok=True)
+            path.write_text(text, encoding="utf-8")
+        return
+    assert path.is_file(), f"{path} is missing; run pytest --update-golden"
+    if old != text:
+        diff = "".join(list(difflib.unified_diff(old.splitlines(True), text.splitlines(True)))[:80])
+        pytest.fail(f"{name} differs from its golden file (pytest --update-golden):\n{diff}")
+
+
+def test_tableaux_are_printed_exactly():
+    """Every coefficient in the C source reads back to the double of c_tableau."""
+    from symmech.simulate.steppers import c_tableau
+
+    text = simulator_source(system_for(bouncing_ball(), "c"))["symmech_bouncing_ball_simulator.c"]
+    for method in C_METHODS:
+        for key, values in c_tableau(method).items():
+            line = next(x for x in text.splitlines() if f" m_{method}_{key}[" in x)
+            printed = line.split("{", 1)[1].rsplit("}", 1)[0].split(",")
+            assert [float(v) for v in printed] == values, (method, key)
