@@ -198,6 +198,9 @@ def test_constrained_rolling_sphere_hits_its_wall():
     assert b.stats["impacts"] == 1
     assert b.stats["constraint_drift"] < 1e-8
     assert b.v[-1, 0] > 0  # bounced off x = 0
+    # the impact's Gram condition (LU solve and Jacobi eigenvalues in C, SVD in NumPy)
+    assert b.stats["impact_condition"] == pytest.approx(a.stats["impact_condition"], rel=1e-9)
+    assert b.stats["impact_condition"] > 1
 
 
 def test_moving_wall_matches_numpy():
@@ -229,6 +232,66 @@ def test_pendulum_wall_and_a_scene_without_walls():
     np.testing.assert_allclose(b.y[-1], a.y[-1], atol=1e-8)
     ts = np.linspace(0, 2, 23)
     np.testing.assert_allclose(b.sol(ts), a.sol(ts), atol=1e-8)  # the same dense output
+
+
+def test_tangential_touches_grazing_and_creeping_contact_match_numpy():
+    """A touch slower than tol_v pushed away is a grazing event; a creeping approach with
+    nothing pushing apart becomes a contact, never a tunnel (hybrid.py's rules)."""
+    (x,) = coordinates("x")
+    k = sp.Symbol("k", positive=True)
+    pushed = Scene(
+        (x,), metric=sp.Matrix([[1]]), potential=-k * x, walls=[Wall(x, restitution=1)], name="px"
+    )
+    kw = {"params": {"k": 1e-12}, "rtol": 1e-8, "atol": 1e-10}
+    a, b = both(pushed, [1e-13], [-1e-12], 3.0, **kw)
+    assert_same_run(a, b, state_tol=1e-20, time_tol=1e-12)
+    assert [e.kind for e in b.events] == ["grazing"]
+    kw = {"params": {"m": 1, "r": 0.5}, "rtol": 1e-8, "atol": 1e-10}
+    a, b = both(newtons_cradle(2), [0.0, 1.0 + 1e-12], [1e-12, 0.0], 3.0, **kw)
+    assert_same_run(a, b, state_tol=1e-20, time_tol=1e-9)
+    assert [e.kind for e in b.events] == ["contact"]
+    assert np.min(b.q[:, 1] - b.q[:, 0] - 1.0) >= -1e-15
+    np.testing.assert_allclose(b.v[-1], [5e-13, 5e-13], rtol=1e-9)
+
+
+def test_non_finite_rhs_in_a_trial_stage_rejects_the_step():
+    """V = k sqrt(y): the force is NaN below the floor, where trial stages land as the
+    ball nears it; those steps are rejected (shrunk), as in the NumPy loop, until the step
+    size underflows at the singular force (both loops stop with the same message)."""
+    (y,) = coordinates("y")
+    m, k = sp.symbols("m k", positive=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # sqrt(y) is not real below the floor
+        scene = Scene(
+            (y,),
+            metric=sp.Matrix([[m]]),
+            potential=k * sp.sqrt(y),
+            walls=[Wall(y, restitution=sp.Rational(1, 2), name="floor")],
+            name="sqrt_well",
+        )
+    a, b = both(scene, [1.0], [0.0], 3.0, params={"m": 1, "k": 1})
+    assert a.status == b.status == "failed"
+    assert b.message.startswith("step size ") and "too small at t = 1.88561808" in b.message
+    assert b.stats["rejected_steps"] == a.stats["rejected_steps"] > 20
+    assert np.all(np.isfinite(b.y))
+    # the speed reached is that of the closed form: v^2 = 2 k sqrt(y0) / m
+    assert b.v[-1, 0] == pytest.approx(-math.sqrt(2), rel=1e-6)
+
+
+FAST_STRESS = ["mass_ratio", "aspect_ratio", "grazing", "nearly_dependent", "zeno", "cradle"]
+
+
+@pytest.mark.parametrize("name", FAST_STRESS)
+def test_stress_cases_pass_on_the_c_route(name):
+    from symmech.bench import stress
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        results = stress.run_all("c", [name])
+    assert results and all(r.passed for r in results), stress.format_table(results)
+    if name == "nearly_dependent":
+        refused = [r for r in results if r.error != r.error]
+        assert refused and all("nearly dependent" in r.detail for r in refused)
 
 
 # ------------------------------------------------------------------------------- batch
