@@ -428,3 +428,79 @@ def test_tableaux_are_printed_exactly():
             line = next(x for x in text.splitlines() if f" m_{method}_{key}[" in x)
             printed = line.split("{", 1)[1].rsplit("}", 1)[0].split(",")
             assert [float(v) for v in printed] == values, (method, key)
+
+
+_DRIVER = r"""
+#include <stdio.h>
+#include <stdlib.h>
+void *PREFIXnew(int, const double *, const double *, int);
+void PREFIXbegin(void *, double, const double *);
+int PREFIXrun(void *, double *, long, double *, long, double *, int *, long, long *);
+void PREFIXinfo(const void *, double *);
+void PREFIXfree(void *);
+int PREFIXbatch(long, const double *, double, int, const double *, const double *, double *);
+int main(void)
+{
+    double P[] = { PARAMS }, y0[] = { Y0 }, info[64], Y[2 * NYV];
+    long cap = 64, ecap = 512, counts[3], total = 0;
+    for (int method = 0; method < 4; ++method) {
+        double opts[] = { 1e-8, 1e-10, TEND / 50, method == 3 ? TEND / 2000 : 0.0, TEND, 100.0,
+                          400.0, 0.0, 8.0 };
+        void *s = PREFIXnew(method, opts, P, 1);
+        double *rec = malloc(sizeof(double) * cap * (NYV + 1));
+        double *seg = malloc(sizeof(double) * cap * (4 + 8 * NYV));
+        double *ev = malloc(sizeof(double) * ecap * (3 + 3 * NYV));
+        int *evi = malloc(sizeof(int) * ecap * 2);
+        PREFIXbegin(s, 0.0, y0);
+        while (PREFIXrun(s, rec, cap, seg, cap, ev, evi, ecap, counts)) total += counts[0];
+        total += counts[0];
+        PREFIXinfo(s, info);
+        printf("method %d status %g events %g\n", method, info[0], info[16]);
+        PREFIXfree(s);
+        free(rec); free(seg); free(ev); free(evi);
+        for (int i = 0; i < NYV; ++i) Y[i] = Y[NYV + i] = y0[i];
+        double binfo[2 * (23 + NYV)];
+        if (PREFIXbatch(2, Y, 0.0, method, opts, P, binfo) != 0) return 1;
+    }
+    printf("records %ld\n", total);
+    return 0;
+}
+"""
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("make", "y0", "t_end"),
+    [(bouncing_ball, [1.0, 0.0], 3.0), (ellipse_gravity, [0, 1.5, 0.3, 0, 0, 2], 6.0)],
+)
+def test_simulator_is_clean_under_address_and_undefined_sanitizers(tmp_path, make, y0, t_end):
+    """Every method, pausing output buffers and the batch entry, under ASan and UBSan."""
+    from symmech.simulate.csim import library
+
+    system = system_for(make(), "c")
+    lib = library(system)
+    params = BALL if make is bouncing_ball else ELLIPSE
+    P = lib.parameters({k: float(v) for k, v in params.items()})
+    driver = (
+        _DRIVER.replace("PREFIX", lib.spec.prefix)
+        .replace("PARAMS", ", ".join(repr(float(x)) for x in P))
+        .replace("Y0", ", ".join(repr(float(x)) for x in y0))
+        .replace("NYV", str(len(y0)))
+        .replace("TEND", repr(float(t_end)))
+    )
+    for name, text in lib.sources.items():
+        (tmp_path / name).write_text(text, encoding="utf-8")
+    (tmp_path / "driver.c").write_text(driver, encoding="utf-8")
+    sources = [name for name in lib.sources if name.endswith(".c")] + ["driver.c"]
+    flags = ["-std=c99", "-O1", "-g", "-fsanitize=address,undefined", "-fno-sanitize-recover=all"]
+    exe = tmp_path / "driver"
+    build = subprocess.run(
+        [require_c_compiler(), *flags, "-o", str(exe), *sources, "-lm"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+    )
+    assert build.returncode == 0, build.stderr
+    run = subprocess.run([str(exe)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stdout + run.stderr
+    assert run.stdout.count("status 1 ") == 4, run.stdout  # every method finished
