@@ -313,3 +313,72 @@ def test_max_events_stops_an_elastic_run(ball):
 def test_the_package_is_callable_as_the_api_promises(ball):
     res = sm.simulate(ball, [1.0], [0.0], 0.1, params=BALL, backend="numpy")
     assert res.status == "finished" and res.success
+
+
+@pytest.mark.parametrize(
+    "backend,method", [("numpy", "rodas4"), ("scipy", "Radau"), ("scipy", "BDF")]
+)
+def test_implicit_methods_take_large_steps_where_the_stiff_mode_rests(backend, method):
+    from symmech.examples import stiff_dumbbell
+
+    scene = stiff_dumbbell()
+    params = {"L": 1.0, "alpha": 0.5, "g": 9.81, "k": 1e8, "m": 1.0}
+    # free fall with the spring at its rest length: the exact motion is a parabola
+    res = simulate(
+        scene,
+        [1.0, 2.0],
+        [0.0, 0.0],
+        0.4,
+        params=params,
+        backend=backend,
+        method=method,
+        rtol=1e-6,
+        atol=1e-8,
+    )
+    assert res.status == "finished" and res.events == []
+    assert res.stats["steps"] < 40
+    assert res.stats["jacobian_calls"] > 0
+    drop = 9.81 * 0.4**2 / 2
+    np.testing.assert_allclose(res.y[-1], [1 - drop, 2 - drop, -3.924, -3.924], atol=1e-5)
+    explicit = simulate(
+        scene,
+        [1.0, 2.0],
+        [0.0, 0.0],
+        0.4,
+        params=params,
+        backend="scipy",
+        method="DOP853",
+        rtol=1e-6,
+        atol=1e-8,
+    )
+    assert explicit.stats["steps"] > 20 * res.stats["steps"]
+
+
+def test_implicit_route_agrees_with_the_explicit_one_through_impacts():
+    from symmech.examples import stiff_dumbbell
+
+    scene = stiff_dumbbell()
+    params = {"L": 1.0, "alpha": 0.5, "g": 9.81, "k": 1e4, "m": 1.0}
+    runs = [
+        simulate(
+            scene,
+            [0.5, 1.5],
+            [0.0, 0.0],
+            0.6,
+            params=params,
+            backend="scipy",
+            method=m,
+            rtol=1e-10,
+            atol=1e-12,
+        )
+        for m in ("Radau", "DOP853")
+    ]
+    times = [[e.time for e in r.impacts()] for r in runs]
+    assert len(times[0]) == len(times[1]) >= 1
+    np.testing.assert_allclose(times[0], times[1], atol=1e-7)
+    np.testing.assert_allclose(runs[0].y[-1], runs[1].y[-1], atol=1e-6)
+
+
+def test_implicit_method_on_the_c_backend_is_refused_with_the_alternatives(ball):
+    with pytest.raises(SimulationError, match="implicit"):
+        simulate(ball, [1.0], [0.0], 1.0, params=BALL, backend="c", method="rodas4")

@@ -38,6 +38,10 @@ from symmech.simulate.system import (
 
 __all__ = ["CONTACT_MODES", "simulate", "system_for"]
 
+#: Implicit methods (they use the generated Jacobian): symmech's Rosenbrock method and
+#: SciPy's (lower case).
+IMPLICIT_METHODS = ("rodas4", "radau", "bdf", "lsoda")
+
 #: What to do at an accumulation of impacts.
 CONTACT_MODES = ("persistent", "stop")
 
@@ -45,16 +49,22 @@ _SYSTEMS: dict[tuple, tuple[weakref.ref, HybridSystem]] = {}
 
 
 def system_for(
-    scene: Scene, target: str, strategy: str = "auto", definitions: Mapping | None = None
+    scene: Scene,
+    target: str,
+    strategy: str = "auto",
+    definitions: Mapping | None = None,
+    jacobian: bool = False,
 ) -> HybridSystem:
     """The :class:`HybridSystem` of ``scene`` for ``target``, built once and cached while
     the scene lives."""
     defs = tuple(sorted((str(k), str(v)) for k, v in (definitions or {}).items()))
-    key = (id(scene), target, strategy, defs)
+    key = (id(scene), target, strategy, defs, jacobian)
     hit = _SYSTEMS.get(key)
     if hit is not None and hit[0]() is scene:
         return hit[1]
-    system = HybridSystem.build(scene, target, strategy=strategy, definitions=definitions)
+    system = HybridSystem.build(
+        scene, target, strategy=strategy, definitions=definitions, jacobian=jacobian
+    )
     _SYSTEMS[key] = (weakref.ref(scene), system)
     return system
 
@@ -151,7 +161,13 @@ def simulate(
     values = check_parameters(scene, params)
 
     target = "numpy" if backend == "numpy" else "c"
-    system = system_for(scene, target, strategy, definitions)
+    implicit = method.lower() in IMPLICIT_METHODS
+    if implicit and backend == "c":
+        raise SimulationError(
+            f"method {method!r} is implicit: it runs on backend 'numpy' (rodas4) or 'scipy'"
+            " (Radau, BDF, LSODA) with the generated Jacobian; the C loop has explicit methods"
+        )
+    system = system_for(scene, target, strategy, definitions, jacobian=implicit)
     fns = Functions(system, values)
     y0 = np.concatenate([q, v])
     for w in range(fns.walls):
@@ -185,19 +201,20 @@ def simulate(
     make: Any
     if backend == "scipy":
 
-        def make(f: Any) -> Any:
-            return ScipyFlow(f, method, rtol_f, atol_f, step_cap)
+        def make(f: Any, jac: Any = None) -> Any:
+            return ScipyFlow(f, method, rtol_f, atol_f, step_cap, jac=jac)
     else:
         fixed = None
         if method == "rk4":
             fixed = step_cap if max_step is not None else span / 1000
 
-        def make(f: Any) -> Any:
-            return RKFlow(f, method, rtol_f, atol_f, step_cap, fixed_step=fixed)
+        def make(f: Any, jac: Any = None) -> Any:
+            return RKFlow(f, method, rtol_f, atol_f, step_cap, jac=jac, fixed_step=fixed)
 
+    jac = fns.flow_jac if implicit else None
     flow = (
-        AugmentedFlow(make, fns.flow_rhs, fns.flow_rates, fns.gaps, 2 * n)
+        AugmentedFlow(make, fns.flow_rhs, fns.flow_rates, fns.gaps, 2 * n, jac=jac)
         if fns.walls
-        else make(fns.flow_rhs)
+        else make(fns.flow_rhs, jac)
     )
     return run(fns, flow, t0f, y0, opts)

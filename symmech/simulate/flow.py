@@ -234,14 +234,16 @@ class AugmentedFlow:
 
     def __init__(
         self,
-        make: Callable[[Rhs], Any],
+        make: Callable[[Rhs, Any], Any],
         rhs: Rhs,
         rates: Callable[[float, np.ndarray, np.ndarray], np.ndarray],
         gaps: Callable[[float, np.ndarray], np.ndarray],
         size: int,
+        jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
     ):
         self.size, self._rhs, self._rates, self._gaps = size, rhs, rates, gaps
-        self.inner = make(self._augmented)
+        self._jac = jac
+        self.inner = make(self._augmented, None if jac is None else self._augmented_jac)
 
     @property
     def stats(self) -> Any:
@@ -251,6 +253,25 @@ class AugmentedFlow:
         y = ya[: self.size]
         ydot = self._rhs(t, y)
         return np.concatenate([ydot, self._rates(t, y, ydot)])
+
+    def _augmented_jac(self, t: float, ya: np.ndarray) -> np.ndarray:
+        """``[[J, 0], [dr/dy, 0]]``: the gaps do not feed back into the motion; the rows of
+        their rates ``r(y) = dpsi q_dot + psi_t`` are central differences (they only steer
+        the step size, so their Jacobian need not be exact)."""
+        assert self._jac is not None
+        k = self.size
+        out = np.zeros((len(ya), len(ya)))
+        y = ya[:k]
+        out[:k, :k] = self._jac(t, y)
+        for j in range(k):
+            h = 1e-7 * max(1.0, abs(y[j]))
+            e = np.zeros(k)
+            e[j] = h
+            up, down = y + e, y - e
+            out[k:, j] = (
+                self._rates(t, up, self._rhs(t, up)) - self._rates(t, down, self._rhs(t, down))
+            ) / (2 * h)
+        return out
 
     def _lift(self, t: float, y: np.ndarray) -> np.ndarray:
         return np.concatenate([y, self._gaps(t, y)])

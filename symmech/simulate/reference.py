@@ -314,7 +314,7 @@ def reference_run(
         )
         t_span = mpmath.mpf(t_end)
 
-        def make(f: Any) -> MpFlow:
+        def make(f: Any, jac: Any = None) -> MpFlow:
             return MpFlow(f, tol, tol / 100, t_span, stages=stages)
 
         flow: Any = (

@@ -158,6 +158,8 @@ class HybridSystem:
     strategy: str
     definitions: Mapping[Any, Any]
     modules: dict[int | None, SceneModule] = field(default_factory=dict)
+    #: the modules carry the Jacobian d(rhs)/dy (for implicit integrators)
+    jacobian: bool = False
     _locked: dict[tuple[str, int], Any] = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -168,12 +170,14 @@ class HybridSystem:
         *,
         strategy: str = "auto",
         definitions: Mapping[Any, Any] | None = None,
+        jacobian: bool = False,
     ) -> HybridSystem:
         """Generate and load the free-flight module of ``scene`` for ``target``
-        (``"c"`` or ``"numpy"``); contact modes are generated on first use."""
+        (``"c"`` or ``"numpy"``); contact modes are generated on first use.  With
+        ``jacobian`` every module also emits d(rhs)/dy."""
         if target not in ("c", "numpy"):
             raise SimulationError(f"target must be 'c' or 'numpy', got {target!r}")
-        system = cls(scene, target, strategy, dict(definitions or {}))
+        system = cls(scene, target, strategy, dict(definitions or {}), jacobian=jacobian)
         system.modules[None] = system._load(scene)
         return system
 
@@ -184,7 +188,15 @@ class HybridSystem:
             strategy=self.strategy,
             definitions=self.definitions or None,
             projectors=scene.is_constrained,
+            jacobian=self.jacobian,
         )
+        if self.jacobian and "jacobian" not in [f.name for f in code.functions]:
+            why = [o for o in code.omitted if o.startswith("jacobian")]
+            raise SimulationError(
+                f"scene {scene.name!r}: no Jacobian for an implicit method"
+                + (f" ({why[0]})" if why else "")
+                + "; use an explicit method"
+            )
         return code.load()
 
     @property
@@ -315,6 +327,16 @@ class Functions:
     def gaps(self, t: float, y: np.ndarray) -> np.ndarray:
         """psi_w(t, q) of every wall."""
         return np.array([self.psi(w, t, y[: self.n]) for w in range(self.walls)])
+
+    def jac(self, mode: int | None, t: float, y: np.ndarray) -> np.ndarray:
+        """d(y_dot)/dy in the mode (the generated Jacobian; zero in a locked contact)."""
+        if self.locked(mode):
+            return np.zeros((len(y), len(y)))
+        return self._call(mode, "jacobian", t, y)
+
+    def flow_jac(self, t: float, y: np.ndarray) -> np.ndarray:
+        """d(y_dot)/dy in the current :attr:`mode`."""
+        return self.jac(self.mode, t, y)
 
     def psi(self, wall: int, t: float, q: np.ndarray) -> float:
         """The gap of ``wall`` at (t, q)."""
