@@ -278,6 +278,25 @@ def test_non_finite_rhs_in_a_trial_stage_rejects_the_step():
     assert b.v[-1, 0] == pytest.approx(-math.sqrt(2), rel=1e-6)
 
 
+def test_nan_trial_stage_with_a_curved_gap_is_rejected_not_raised():
+    """The walls' gap rates of a NaN trial stage are NaN (the step is rejected) even when
+    the wall's gradient reads q: psi = y + y^3/100 under the V = k sqrt(y) well."""
+    (y,) = coordinates("y")
+    m, k = sp.symbols("m k", positive=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = Scene(
+            (y,),
+            metric=sp.Matrix([[m]]),
+            potential=k * sp.sqrt(y),
+            walls=[Wall(y + y**3 / 100, restitution=sp.Rational(1, 2), name="floor")],
+            name="sqrt_well_curved",
+        )
+    res = sm.simulate(scene, [1.0], [0.0], 3.0, params={"m": 1, "k": 1}, backend="c")
+    assert res.status == "failed" and res.message.startswith("step size ")
+    assert res.stats["rejected_steps"] > 20 and np.all(np.isfinite(res.y))
+
+
 FAST_STRESS = ["mass_ratio", "aspect_ratio", "grazing", "nearly_dependent", "zeno", "cradle"]
 
 
