@@ -51,6 +51,16 @@ All ratios are "baseline / symmech" for times and operation counts and "symmech 
 baseline" for throughput, so a ratio > 1 always means symmech is better.  Figures are
 indicative (timings on a shared machine); they are never asserted by the tests.
 
+Issue 13 table (printed first; ``--issue13-only`` prints only it): C generation time of
+the n-link pendulum on a cart with ``linear_solve`` (n = 8, 16, 32; declaration included,
+sympy's cache cleared) against what PyDy users do, measured in the same run: KanesMethod
+forming M and f, ``sympy.cse`` of both, and C99 printing of the result
+(``sympy.ccode`` of every replacement and reduced expression); the 4-link pendulum on a
+cart with a wall at its tip (``linear_solve``; and the time for ``closed_form`` to be
+refused by its budget); the NumPy module's one-state call of the 8-link acceleration
+against lambdify of M, f and ``numpy.linalg.solve`` (best of many calls, argument checks
+included).
+
 Run:  python3 benchmarks/codegen.py [--states N] [--chunk N] [--limit S]   (not run in CI)
 """
 
@@ -77,9 +87,14 @@ import mpmath as mp
 import numpy as np
 import sympy as sp
 from sympy.core.cache import clear_cache
+from sympy.physics import mechanics as sm_mechanics
 
 import symmech as sm
 from symmech.examples import bouncing_ellipse, carnot_3_13, pendulum_on_cart
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from derive import _mechanics_model  # the PyDy model of benchmarks/derive.py
+from scale_support import cart_with_tip_wall
 
 DPS = 50
 KERNEL_FLAGS = ("-std=c99", "-O2", "-fno-tree-vectorize", "-fPIC", "-shared")
@@ -895,6 +910,73 @@ def _targets(rows: list[Row]) -> None:
         )
 
 
+def pydy_generation(n: int) -> float:
+    """What PyDy users do: KanesMethod's M and f, one ``sympy.cse`` over both, C printing."""
+    clear_cache()
+    t0 = time.perf_counter()
+    q, u, frame, particles, forces, kindiffs = _mechanics_model(n)
+    kane = sm_mechanics.KanesMethod(frame, q_ind=q, u_ind=u, kd_eqs=kindiffs)
+    kane.kanes_equations(particles, forces)
+    M, f = kane.mass_matrix, kane.forcing
+    plain = {s: sp.Symbol(f"s{k}") for k, s in enumerate((*q, *u))}
+    replacements, reduced = sp.cse([M.xreplace(plain), f.xreplace(plain)])
+    text = [sp.ccode(e, assign_to=str(x)) for x, e in replacements]
+    for block in reduced:
+        text.extend(sp.ccode(e) for e in block)
+    return time.perf_counter() - t0
+
+
+def issue13_table() -> None:
+    """Generation time against PyDy, the 4-link cart with a tip wall, NumPy one-state."""
+    print("\nissue 13: generation time (C, linear_solve) against PyDy's route, same run")
+    head = f"{'case':34s} {'symmech [s]':>11s} {'PyDy [s]':>9s} {'PyDy/sm':>8s}"
+    print(head)
+    print("-" * len(head))
+    for n in (8, 16, 32):
+        clear_cache()
+        t0 = time.perf_counter()
+        sm.codegen.generate(pendulum_on_cart(n), "c", strategy="linear_solve")
+        t_sm = time.perf_counter() - t0
+        t_py = pydy_generation(n)
+        print(
+            f"{f'cart + {n}-link pend.':34s} {t_sm:11.2f} {t_py:9.2f} {t_py / t_sm:8.1f}",
+            flush=True,
+        )
+    clear_cache()
+    t0 = time.perf_counter()
+    sm.codegen.generate(cart_with_tip_wall(4), "c", strategy="linear_solve")
+    t_tip = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    try:
+        sm.codegen.generate(cart_with_tip_wall(4), "c", strategy="closed_form")
+        refused = "generated"
+    except sm.codegen.CodegenError:
+        refused = "refused by its budget"
+    t_refuse = time.perf_counter() - t0
+    print(f"{'cart + 4-link pend., tip wall':34s} {t_tip:11.2f}  (linear_solve; target < 5 s)")
+    print(f"{'  same, closed_form':34s} {t_refuse:11.2f}  ({refused})")
+    scene = pendulum_on_cart(8)
+    code = sm.codegen.generate(scene, "numpy", strategy="linear_solve")
+    mod = code.load()
+    params = np.linspace(0.5, 1.5, len(code.plan.parameters))
+    rng = np.random.default_rng(8)
+    qv, vv = rng.normal(size=9), rng.normal(size=9)
+    ours = best_time(lambda: mod.acceleration(qv, vv, params))
+    syms = [*scene.coordinates, *scene.velocities, *code.plan.parameters]
+    lam = sp.lambdify(syms, [sp.Matrix(scene.mass_matrix()), sp.Matrix(scene.forcing())], cse=True)
+
+    def baseline() -> np.ndarray:
+        G, F = lam(*qv, *vv, *params)
+        return np.linalg.solve(np.asarray(G, float), np.asarray(F, float).ravel())
+
+    base = best_time(baseline)
+    np.testing.assert_allclose(mod.acceleration(qv, vv, params), baseline(), rtol=1e-10)
+    print(
+        f"{'NumPy one state, 8-link accel.':34s} {ours * 1e6:9.1f} us  lambdify + solve"
+        f" {base * 1e6:.1f} us  (ratio {ours / base:.1f}; target <= 2)"
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--states", type=int, default=1_000_000, help="batch size (default 10^6)")
@@ -907,7 +989,11 @@ def main() -> None:
     )
     ap.add_argument("--error-states", type=int, default=16, help="states of the error table")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--issue13-only", action="store_true", help="only the issue 13 table")
     opts = ap.parse_args()
+    issue13_table()
+    if opts.issue13_only:
+        return
 
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)

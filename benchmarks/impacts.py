@@ -11,20 +11,37 @@ build the Scene and derive the impact map (fresh Scene, nothing cached), the tim
 Carnot check and how it was decided, and sympy.count_ops of the map before ("raw",
 ``simplify="none"``) and after the stabilising simplification (the default).
 
+A second table (issue 13) times the closed-form impact maps of two larger systems built
+by hand (tests/scale_support.py): the 3-link pendulum on a cart with a wall at its tip and
+a Chaplygin ball (5 quasi-velocities, dense trigonometric inertia) hitting a wall it rolls
+on.  For each: ``codegen.generate(..., strategy="closed_form")``, which the structural
+budget (symmech.budget.CLOSED_FORM_TERMS) refuses at once, the time to that refusal;
+``strategy="auto"`` end to end (it falls back to linear_solve); and, as the baseline in
+the same run, the unbudgeted ``scene.impact_map(0)`` (``--no-baseline`` skips it: 15 to
+30 s each).
+
 Run:  python benchmarks/impacts.py          (not run in CI)
 """
 
 from __future__ import annotations
 
+import argparse
+import sys
 import time
+import warnings
 from collections.abc import Callable
+from pathlib import Path
 
 import sympy as sp
 
 import symmech as sm
+from symmech.codegen import CodegenError, generate
 from symmech.declaration import shapes
 from symmech.examples import body_pendulum_rotor, trig_wall
 from symmech.impacts import derive_impact_map, kkt_post_velocity
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+from scale_support import cart_with_tip_wall, chaplygin_ball_wall
 
 k, r, m, I, a, b = sp.symbols("k r m I a b", positive=True)
 alpha = sp.Symbol("alpha", nonnegative=True)
@@ -149,7 +166,58 @@ def run(name: str, build: Callable[[], sm.Scene], symbolic_kkt: bool = True) -> 
     )
 
 
+def budget_row(name: str, build: Callable[[], sm.Scene], baseline: bool) -> str:
+    """Time to the closed_form refusal, auto end to end, and the unbudgeted impact map."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = build()
+        t0 = time.perf_counter()
+        try:
+            generate(scene, "c", strategy="closed_form")
+            refused = "generated"
+        except CodegenError as exc:
+            refused = "refused: " + str(exc).split(": over its budget ")[1].split(" (")[0]
+        t_refuse = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        code = generate(build(), "c", strategy="auto")
+        t_auto = time.perf_counter() - t0
+        t_base = None
+        if baseline:
+            t0 = time.perf_counter()
+            build().impact_map(0)
+            t_base = time.perf_counter() - t0
+    base = f"{t_base:12.2f}" if t_base is not None else f"{'-':>12s}"
+    return (
+        f"{name:34s} {t_refuse:13.3f} {refused:38s} {t_auto:9.2f} {code.plan.strategy:>12s} {base}"
+    )
+
+
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--no-baseline", action="store_true", help="skip the unbudgeted maps")
+    ap.add_argument("--budget-only", action="store_true", help="only the second table")
+    args = ap.parse_args()
+    if not args.budget_only:
+        textbook()
+    head = (
+        f"{'case (issue 13)':34s} {'closed_form[s]':>13s} {'budget':38s} {'auto [s]':>9s}"
+        f" {'auto took':>12s} {'baseline [s]':>12s}"
+    )
+    print("\n" + head)
+    print("-" * len(head))
+    for name, build in (
+        ("3-link cart, tip wall", lambda: cart_with_tip_wall(3)),
+        ("Chaplygin ball, rolling wall", chaplygin_ball_wall),
+    ):
+        print(budget_row(name, build, not args.no_baseline), flush=True)
+    print(
+        "\nclosed_form: generate(strategy='closed_form') until the budget refuses it (at once,"
+        " from the structure);\nauto: generate(strategy='auto') end to end (C);"
+        " baseline: scene.impact_map(0) without any budget."
+    )
+
+
+def textbook() -> None:
     # warm up sympy's caches of imports and printers on a tiny scene
     x, y = sm.coordinates("x y")
     sm.Scene((x, y), metric=sp.eye(2), walls=[sm.Wall(y)]).impact_map(0).carnot()

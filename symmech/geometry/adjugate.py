@@ -21,7 +21,7 @@ from collections.abc import Callable, Sequence
 from itertools import combinations
 from typing import Any
 
-from symmech.budget import BudgetExceeded
+from symmech.budget import BudgetExceeded, checkpoint
 
 __all__ = ["adjugate_det"]
 
@@ -83,6 +83,7 @@ def adjugate_det(
 
     def keep(p: Poly) -> Poly:
         nonlocal held
+        checkpoint()  # the deadline of a stage around this one (symmech.budget.time_limit)
         p = reduce(p)
         held += len(p)
         if budget is not None and held > budget:

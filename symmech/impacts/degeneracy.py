@@ -426,7 +426,7 @@ def singular_set(
         for f in _factors(expr):
             add(f, description)
     for expr in closed_form:
-        if sp.count_ops(expr) > FACTOR_MAX_OPS:
+        if expr.is_number or sp.count_ops(expr) > FACTOR_MAX_OPS:  # numbers: no denominator
             continue
         den = sp.fraction(sp.cancel(sp.together(expr)))[1]
         for f in _factors(den):

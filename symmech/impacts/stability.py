@@ -101,6 +101,7 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     expr = sp.sympify(expr)
     if expr.is_number or expr.is_Symbol:
         return sp.nsimplify(expr) if isinstance(expr, sp.Float) else expr
+    limits.checkpoint()
     if sp.count_ops(expr) > limits.STABLE_OPS:
         return expr
     st = frozenset(state)
@@ -129,11 +130,13 @@ def _already_stable(expr: sp.Expr, state: frozenset) -> bool:
     """True when ``expr`` is already in the form the stabilising step produces, decided on
     its tree without any polynomial arithmetic: a sum of terms whose state monomials
     differ, or whose coefficients on a shared state monomial form a linear sum of
-    distinct symbols (nothing to combine or factor), each term the product of a number,
+    distinct symbols (nothing to combine or factor) or are all positive by structure
+    (:func:`_positive`: a sum of positive terms cannot cancel), each term the product of a number,
     positive integer powers of symbols, of state generators (state symbols, functions of
     the state) and of linear sums of symbols free of the state (irreducible: ``factor``
-    returns them unchanged), with no denominator.  ``cancel`` and ``factor`` would return
-    such an expression unchanged up to the order of its factors; the test costs one walk
+    returns them unchanged), with no denominator.  ``cancel`` and ``factor`` would only
+    regroup such an expression (no difference of nearly equal terms is left to combine),
+    at a cost that grows quickly with its number of symbols; the test costs one walk
     over the top two levels of the tree."""
     groups: dict[sp.Expr, list[sp.Expr]] = {}
     for term in sp.Add.make_args(expr):
@@ -152,8 +155,33 @@ def _already_stable(expr: sp.Expr, state: frozenset) -> bool:
                 return False
         key = sp.Mul(*monomial)
         groups.setdefault(key, []).append(term / key)
-    # terms sharing a state monomial: their coefficients must form a linear sum
-    return all(len(c) == 1 or _linear(sp.Add(*c)) for c in groups.values())
+    # terms sharing a state monomial: their coefficients must form a linear sum, or all be
+    # positive (a sum of positive terms is evaluated without cancellation)
+    return all(
+        len(c) == 1 or _linear(sp.Add(*c)) or all(_positive(t) for t in c) for c in groups.values()
+    )
+
+
+def _positive(e: sp.Expr) -> bool:
+    """True when ``e`` is positive by its structure: a product of positive numbers,
+    symbols declared positive, even powers, and sums of such terms."""
+    for factor in sp.Mul.make_args(e):
+        if factor.is_Number:
+            if not factor > 0:
+                return False
+            continue
+        base, exp = factor.as_base_exp()
+        if exp.is_Integer and exp % 2 == 0:
+            continue
+        if base.is_Symbol:
+            if base.is_positive is not True:
+                return False
+        elif base.is_Add:
+            if not all(_positive(t) for t in base.args):
+                return False
+        else:
+            return False
+    return True
 
 
 def stable_linear(
