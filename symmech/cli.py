@@ -54,6 +54,8 @@ from typing import NoReturn
 
 import sympy as sp
 
+from symmech.codegen.escape import file_name, terminal
+from symmech.codegen.output_files import write_text_atomic
 from symmech.declaration.latex import latex_text
 from symmech.declaration.symbols import coordinates as make_coordinates
 from symmech.errors import SceneError, SymmechError
@@ -110,7 +112,8 @@ class _Progress:
     def __call__(self, stage: str) -> None:
         if not self.quiet:
             elapsed = time.perf_counter() - self.start
-            print(f"[symmech {elapsed:7.2f}s] {stage}", file=sys.stderr, flush=True)
+            line = f"[symmech {elapsed:7.2f}s] {terminal(stage)}"
+            print(line, file=sys.stderr, flush=True)
 
 
 def _silent(stage: str) -> None:
@@ -699,7 +702,7 @@ def _derive(
     written: list[Path] = []
     for target in dict.fromkeys(targets):
         if out is None:
-            folder = Path(f"{scene.name}_{target}")
+            folder = Path(f"{file_name(scene.name)}_{target}")
         elif len(set(targets)) > 1:
             folder = Path(out) / target
         else:
@@ -720,7 +723,7 @@ class _Parser(argparse.ArgumentParser):
     """An ArgumentParser whose usage errors are one line and exit with code 2."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(EXIT_INPUT, f"symmech: error: {message} (see 'symmech --help')\n")
+        self.exit(EXIT_INPUT, f"symmech: error: {terminal(message)} (see 'symmech --help')\n")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -788,12 +791,14 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _one_line(exc: BaseException) -> str:
+    """The error as one line safe for a terminal (file and scene names may hold escape
+    sequences: :func:`symmech.codegen.escape.terminal`)."""
     problems = getattr(exc, "problems", None)
     if isinstance(problems, list) and len(problems) > 1:
         text = f"{len(problems)} problems: " + "; ".join(problems)
     else:
         text = str(exc)
-    return " ".join(text.split())
+    return terminal(" ".join(text.split()))
 
 
 def _run(args: argparse.Namespace, progress: _Progress) -> int:
@@ -811,7 +816,7 @@ def _run(args: argparse.Namespace, progress: _Progress) -> int:
         targets = args.emit or ["c"]
         paths = _derive(spec, targets, args.output, progress, args.strategy)
         for p in paths:
-            print(p)
+            print(terminal(p))
         progress(f"done: {len(paths)} files")
         return EXIT_OK
     if command == "export":
@@ -823,7 +828,7 @@ def _run(args: argparse.Namespace, progress: _Progress) -> int:
             functions={k: e for k, e in sf.functions.items() if not _is_applied(e)},
         )
         if args.output:
-            Path(args.output).write_text(text, encoding="utf-8")
+            write_text_atomic(args.output, text)
             progress(f"wrote {args.output}")
         else:
             sys.stdout.write(text)
@@ -927,8 +932,8 @@ def _main(argv: list[str]) -> int:
     except OSError as exc:
         if args.debug:
             raise
-        where = f" {exc.filename}:" if exc.filename else ""
-        print(f"symmech: error:{where} {exc.strerror or exc}", file=sys.stderr)
+        where = f" {terminal(exc.filename)}:" if exc.filename else ""
+        print(f"symmech: error:{where} {terminal(exc.strerror or exc)}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print("symmech: interrupted", file=sys.stderr)

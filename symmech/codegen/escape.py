@@ -11,6 +11,7 @@ that builds a file name:
 ``python_docstring``  text inside a Python triple-quoted (non-raw) docstring ``\"\"\"...\"\"\"``
 ``python_comment``    text after ``#`` in Python
 ``file_name``         a file-name stem (and C / Python identifier part) from a name
+``terminal``          text printed on a terminal (the command line's stderr and stdout)
 
 The rules, each a property the tests check on hostile strings:
 
@@ -34,6 +35,10 @@ The rules, each a property the tests check on hostile strings:
   before the closing ``\"\"\"`` can end the string early) and backslashes are doubled (no
   escape sequence of the text is interpreted: ``\\N{...}`` or ``\\x`` cannot make the file
   unimportable).
+* *Terminal.*  Every character that is not printable, except a newline, is written as its
+  ``repr`` escape, so an escape sequence (``\x1b[...``), a carriage return or a bell in a
+  file or scene name cannot move the cursor, recolour or retitle the terminal; backslashes
+  are left as they are (this text is only read, never parsed).
 * *File names.*  Only ``[0-9A-Za-z_]`` (runs of others become one ``_``), never empty,
   never starting with a digit, never ``.``/``..``, and at most :data:`MAX_STEM` characters:
   a longer name is cut and ends with 12 hexadecimal digits of the SHA-256 of the full name
@@ -53,6 +58,7 @@ __all__ = [
     "one_line",
     "python_comment",
     "python_docstring",
+    "terminal",
 ]
 
 #: Longest file-name stem :func:`file_name` returns (a file system allows 255 bytes per
@@ -114,6 +120,14 @@ def python_comment(text: object) -> str:
     """``text`` safe after ``#`` in Python: one line with visible escapes (nothing else
     can end a comment)."""
     return one_line(text)
+
+
+def terminal(text: object) -> str:
+    """``text`` safe to print on a terminal (module docstring): non-printable characters
+    other than a newline as ``repr`` escapes."""
+    return "".join(
+        ch if ch == "\n" or ch == " " or ch.isprintable() else repr(ch)[1:-1] for ch in str(text)
+    )
 
 
 def file_name(name: object, *, limit: int = MAX_STEM) -> str:

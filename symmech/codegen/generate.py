@@ -23,6 +23,7 @@ import sympy as sp
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
 from symmech.codegen.escape import file_name
 from symmech.codegen.lower import LoweredFunction, Names, lower
+from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import Block, CodegenError, ScenePlan, build_plan
 from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
 from symmech.declaration.symbols import t as TIME
@@ -63,14 +64,19 @@ class GeneratedCode:
     parameter_rules: tuple[ParameterRule, ...] = field(default=())
 
     def write(self, folder: str | Path) -> list[Path]:
-        """Write every file into ``folder`` (created if needed); returns the paths."""
+        """Write every file into ``folder`` (created if needed); returns the paths.
+
+        Each file is written atomically and a symbolic link planted in ``folder`` under a
+        generated file's name is replaced, never written through
+        (:func:`~symmech.codegen.output_files.write_text_atomic`).  File names are the
+        safe, short stems of :func:`~symmech.codegen.escape.file_name`."""
         out = Path(folder)
         out.mkdir(parents=True, exist_ok=True)
         paths = []
         for name, text in self.files.items():
-            path = out / name
-            path.write_text(text, encoding="utf-8")
-            paths.append(path)
+            if Path(name).name != name or name in (".", ".."):
+                raise CodegenError(f"generated file name {name!r} is not a plain file name")
+            paths.append(write_text_atomic(out / name, text))
         return paths
 
     def operation_counts(self) -> dict[str, int]:

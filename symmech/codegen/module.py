@@ -42,6 +42,7 @@ import sympy as sp
 
 from symmech.codegen.build import DEFAULT_FLAGS, cache_dir, compile_library, load_library
 from symmech.codegen.lower import LoweredFunction
+from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule, check_parameters, real_array
 from symmech.errors import SymmechError
@@ -529,10 +530,11 @@ def _import_numpy_module(code: GeneratedCode, folder: Path):
     text = code.files[f"{code.stem}.py"]
     key = hashlib.sha256(text.encode()).hexdigest()[:16]
     path = folder / f"{code.stem}_{key}.py"
-    if not path.is_file():
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(text, encoding="utf-8")
-        tmp.replace(path)
+    # the cache folder may be shared: a file there is used only if it is a regular file
+    # (not a link) holding exactly this text, else it is replaced
+    fresh = path.is_file() and not path.is_symlink()
+    if not fresh or path.read_text(encoding="utf-8") != text:
+        write_text_atomic(path, text)
     name = f"_symmech_generated_{code.stem}_{key}"
     if name in sys.modules:
         return sys.modules[name], path

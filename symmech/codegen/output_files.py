@@ -1,0 +1,54 @@
+"""Writing generated files: atomically, and never through a link planted in the folder.
+
+:func:`write_text_atomic` writes a file's text into a new temporary file in the target
+folder (``mkstemp``: created exclusively, so an existing file or link of that name is never
+opened) and renames it over the target (``os.replace``: the rename replaces a symbolic link
+itself, never the file it points to).  A reader sees the old file or the new one, never a
+half-written file, and a link planted where a generated file goes is replaced, its target
+untouched.  Used by :meth:`~symmech.codegen.generate.GeneratedCode.write`, the module
+cache of the NumPy backend and ``symmech derive -o`` / ``symmech export -o``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["FILE_MODE", "write_text_atomic"]
+
+#: Permissions of a written file (read for everyone, write for the owner).
+FILE_MODE = 0o644
+
+
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` (UTF-8, newlines as given) to ``path`` atomically (module docstring).
+
+    Raises ``IsADirectoryError`` if ``path`` is a folder (not a link to one), and the
+    ``OSError`` of the file system otherwise, naming ``path`` (the temporary file is
+    removed)."""
+    path = Path(path)
+    if path.is_dir() and not path.is_symlink():
+        raise IsADirectoryError(errno.EISDIR, "is a folder, not a file", str(path))
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name[:60]}.", suffix=".tmp", dir=path.parent)
+    except OSError as exc:  # name the file asked for, not the temporary one
+        raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, FILE_MODE)
+        os.replace(tmp, path)
+    except OSError as exc:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+    return path
