@@ -17,7 +17,6 @@ finite, with their declared signs, restitutions in [0, 1]) and the options.
 
 from __future__ import annotations
 
-import math
 import weakref
 from collections.abc import Mapping
 from typing import Any
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
+from symmech.simulate.checks import CONTACT_MODES, check_run, states
 from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
 from symmech.simulate.hybrid import Options, run
 from symmech.simulate.result import SimulationResult
@@ -42,8 +42,6 @@ __all__ = ["CONTACT_MODES", "simulate", "system_for"]
 #: SciPy's (lower case).
 IMPLICIT_METHODS = ("rodas4", "radau", "bdf", "lsoda")
 
-#: What to do at an accumulation of impacts.
-CONTACT_MODES = ("persistent", "stop")
 
 _SYSTEMS: dict[tuple, tuple[weakref.ref, HybridSystem]] = {}
 
@@ -67,33 +65,6 @@ def system_for(
     )
     _SYSTEMS[key] = (weakref.ref(scene), system)
     return system
-
-
-def _vector(value: object, n: int, what: str) -> np.ndarray:
-    try:
-        a = np.asarray(value)
-    except Exception as exc:
-        raise SimulationError(f"{what}: cannot be read as an array ({exc})") from exc
-    if a.dtype.kind == "c":
-        raise SimulationError(f"{what}: complex values are not a mechanical state")
-    if a.dtype.kind not in "biuf":
-        raise SimulationError(f"{what}: expected real numbers, got dtype {a.dtype}")
-    a = a.astype(np.float64)
-    if a.shape != (n,):
-        raise SimulationError(f"{what}: expected shape ({n},), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
-    return a
-
-
-def _positive(value: object, what: str) -> float:
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise SimulationError(f"{what}: expected a positive number, got {value!r}") from exc
-    if not (math.isfinite(x) and x > 0):
-        raise SimulationError(f"{what}: expected a finite positive number, got {value!r}")
-    return x
 
 
 def simulate(
@@ -132,32 +103,23 @@ def simulate(
         raise SimulationError(f"scene: expected a symmech.Scene, got {type(scene).__name__}")
     if backend not in BACKENDS:
         raise SimulationError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    if contact not in CONTACT_MODES:
-        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
+    if not isinstance(method, str):
+        raise SimulationError(f"method must be a name, got {method!r}")
+    o = check_run(
+        t0=t0,
+        t_end=t_end,
+        rtol=rtol,
+        atol=atol,
+        max_step=max_step,
+        max_events=max_events,
+        event_samples=event_samples,
+        contact=contact,
+    )
     n = scene.n
-    q = _vector(q0, n, "q0")
-    v = _vector(v0, n, "v0")
-    t0f = float(t0)
-    tend = float(t_end)
-    if not (math.isfinite(t0f) and math.isfinite(tend)):
-        raise SimulationError(f"t0 and t_end must be finite, got {t0!r}, {t_end!r}")
-    if not tend > t0f:
-        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
-    rtol_f = _positive(rtol, "rtol")
-    if not rtol_f < 1:
-        raise SimulationError(f"rtol must be below 1, got {rtol!r}")
-    if rtol_f < 100 * np.finfo(float).eps:
-        raise SimulationError(
-            f"rtol = {rtol!r} is below 100 eps = {100 * np.finfo(float).eps:.3g}: float64"
-            " cannot deliver it (use the mpmath reference for more digits)"
-        )
-    atol_f = _positive(atol, "atol")
+    q = states(q0, n, "q0")
+    v = states(v0, n, "v0")
+    t0f, tend, rtol_f, atol_f, step_cap = o.t0, o.t_end, o.rtol, o.atol, o.max_step
     span = tend - t0f
-    step_cap = span if max_step is None else _positive(max_step, "max_step")
-    if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
-        raise SimulationError(f"max_events must be a positive integer, got {max_events!r}")
-    if isinstance(event_samples, bool) or not isinstance(event_samples, int) or event_samples < 1:
-        raise SimulationError(f"event_samples must be a positive integer, got {event_samples!r}")
     values = check_parameters(scene, params)
 
     target = "numpy" if backend == "numpy" else "c"

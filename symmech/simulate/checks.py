@@ -1,0 +1,126 @@
+"""Checks of a run's input, shared by ``simulate`` and ``simulate_batch``.
+
+Every argument is checked before anything is generated or run, and a problem raises
+:class:`~symmech.simulate.system.SimulationError` naming the argument (and the row, for a
+batch): states of the right shape, real and finite; ``t_end > t0``, both finite;
+``100 eps <= rtol < 1`` (float64 cannot deliver less), ``atol > 0``, ``max_step > 0``;
+``max_events`` and ``event_samples`` positive integers; ``contact`` one of
+:data:`CONTACT_MODES`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from symmech.simulate.system import SimulationError
+
+__all__ = ["CONTACT_MODES", "RunOptions", "check_run", "positive", "states"]
+
+#: What to do at an accumulation of impacts.
+CONTACT_MODES = ("persistent", "stop")
+
+EPS = float(np.finfo(float).eps)
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """The checked options of a run."""
+
+    t0: float
+    t_end: float
+    rtol: float
+    atol: float
+    max_step: float
+    max_events: int
+    event_samples: int
+    contact: str
+
+
+def positive(value: object, what: str) -> float:
+    """``value`` as a finite positive float, or a SimulationError naming ``what``."""
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise SimulationError(f"{what}: expected a positive number, got {value!r}") from exc
+    if not (math.isfinite(x) and x > 0):
+        raise SimulationError(f"{what}: expected a finite positive number, got {value!r}")
+    return x
+
+
+def _count(value: object, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise SimulationError(f"{what} must be a positive integer, got {value!r}")
+    return value
+
+
+def states(value: object, n: int, what: str, *, rows: bool = False) -> np.ndarray:
+    """``value`` as float64 of shape ``(n,)`` (or ``(N, n)`` with ``rows``, N >= 1): real
+    (not complex, not strings or objects) and finite."""
+    try:
+        a = np.asarray(value)
+    except Exception as exc:
+        raise SimulationError(f"{what}: cannot be read as an array ({exc})") from exc
+    if a.dtype.kind == "c":
+        raise SimulationError(f"{what}: complex values are not a mechanical state")
+    if a.dtype.kind not in "biuf":
+        raise SimulationError(f"{what}: expected real numbers, got dtype {a.dtype}")
+    a = np.array(a, dtype=np.float64, order="C", copy=True)
+    if rows:
+        if a.ndim != 2 or a.shape[1] != n or a.shape[0] < 1:
+            raise SimulationError(f"{what}: expected shape (N, {n}) with N >= 1, got {a.shape}")
+        bad = ~np.all(np.isfinite(a), axis=1)
+        if bad.any():
+            row = int(np.argmax(bad))
+            raise SimulationError(f"{what}: row {row} is not finite: {a[row].tolist()}")
+        return a
+    if a.shape != (n,):
+        raise SimulationError(f"{what}: expected shape ({n},), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
+    return a
+
+
+def check_run(
+    *,
+    t0: Any,
+    t_end: Any,
+    rtol: Any,
+    atol: Any,
+    max_step: Any,
+    max_events: Any,
+    event_samples: Any,
+    contact: Any,
+) -> RunOptions:
+    """The checked options (see the module docstring)."""
+    if contact not in CONTACT_MODES:
+        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
+    try:
+        t0f, tend = float(t0), float(t_end)
+    except (TypeError, ValueError) as exc:
+        raise SimulationError(f"t0 and t_end must be numbers, got {t0!r}, {t_end!r}") from exc
+    if not (math.isfinite(t0f) and math.isfinite(tend)):
+        raise SimulationError(f"t0 and t_end must be finite, got {t0!r}, {t_end!r}")
+    if not tend > t0f:
+        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
+    rtol_f = positive(rtol, "rtol")
+    if not rtol_f < 1:
+        raise SimulationError(f"rtol must be below 1, got {rtol!r}")
+    if rtol_f < 100 * EPS:
+        raise SimulationError(
+            f"rtol = {rtol!r} is below 100 eps = {100 * EPS:.3g}: float64 cannot deliver it"
+            " (use symmech.simulate.reference for more digits)"
+        )
+    return RunOptions(
+        t0=t0f,
+        t_end=tend,
+        rtol=rtol_f,
+        atol=positive(atol, "atol"),
+        max_step=tend - t0f if max_step is None else positive(max_step, "max_step"),
+        max_events=_count(max_events, "max_events"),
+        event_samples=_count(event_samples, "event_samples"),
+        contact=contact,
+    )
