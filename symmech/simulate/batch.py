@@ -162,7 +162,7 @@ def simulate_batch(
         samples=event_samples,
     )
     index, vec = options_vector(opts, method, step_cap, t0f)
-    _check_rows(fns, Q, V, t0f, rtol_f, atol_f)
+    _check_rows(fns, values, Q, V, t0f, rtol_f, atol_f)
     lib = library(system)
     P = lib.parameters(values)
     N = Q.shape[0]
@@ -200,24 +200,27 @@ def simulate_batch(
 
 
 def _check_rows(
-    fns: Functions, Q: np.ndarray, V: np.ndarray, t0: float, rtol: float, atol: float
+    fns: Functions,
+    values: Mapping[str, float],
+    Q: np.ndarray,
+    V: np.ndarray,
+    t0: float,
+    rtol: float,
+    atol: float,
 ) -> None:
     """psi >= 0 at every wall and v in D for every row (as :func:`simulate` checks one
     state); a small residual of v is projected away with P, in place, by the same call
     :func:`simulate` makes, so that a row runs exactly as the single run would."""
     mod = fns.system.free
-    p = fns._pvec(None)
+    p = {k: values[k] for k in mod.parameters}
     for w in range(fns.walls):
-        name = mod._wall_function("psi", w)
-        spec = {f.name: f for f in mod.code.functions}[name]
-        t = np.full(Q.shape[0], t0) if spec.takes_time else None
-        psi = np.asarray(mod.call(name, Q, params=p, t=t), dtype=float).reshape(-1)
-        bad = psi < -10 * atol
+        psi = np.asarray(mod.psi(Q, p, wall=w, t=np.full(Q.shape[0], t0)), dtype=float)
+        bad = psi.reshape(-1) < -10 * atol
         if bad.any():
             row = int(np.argmax(bad))
             raise SimulationError(
                 f"Q0 row {row} is on the wrong side of wall {fns.wall_names[w]!r}:"
-                f" psi = {float(psi[row])!r} < 0"
+                f" psi = {float(psi.reshape(-1)[row])!r} < 0"
             )
     if not fns.constrained:
         return

@@ -75,6 +75,7 @@ class SimulatorSpec:
     moving: tuple[int, ...]
     locked: tuple[int, ...]
     normal_index: int
+    wall_names: tuple[str, ...]
     m: int
     has_frame: int
     calls: dict[str, Any]
@@ -130,6 +131,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
     free = system.free
     walls = len(scene.walls)
     fns = Functions(system, {str(p): 1.0 for p in scene.parameters})
+    by_wall = {(f.kind, f.wall_index): f.name for f in free.code.functions if f.wall}
     moving = tuple(int(m) for m in fns.moving)
     contacts: dict[int, Any] = {w: system.contact(w) for w in range(walls) if not moving[w]}
     locked = tuple(int(w in contacts and contacts[w] is None) for w in range(walls))
@@ -157,7 +159,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         for k, kind in enumerate(_WALL_KINDS):
             if kind == "psi_t" and not moving[w]:
                 continue
-            name = free._wall_function(kind, w)
+            name = by_wall[(kind, w)]
             wall_calls.append((k * walls + w, _call(free, name, {**qv, "out": "out"}, 0)))
         if moving[w]:
             continue
@@ -189,6 +191,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         moving=moving,
         locked=locked,
         normal_index=system.normal_index(0) if walls else 0,
+        wall_names=fns.wall_names,
         m=scene.constraint_matrix.rows,
         has_frame=int(scene.declaration.frame is not None),
         calls={
@@ -479,15 +482,15 @@ def run_c(
     clock = _time.perf_counter()
     index, vec = options_vector(opts, method, max_step, t0)
     lib = library(system)
-    fns = Functions(system, values)
-    n, names = system.n, fns.wall_names
+    spec = lib.spec
+    n, names = system.n, spec.wall_names
     ny = 2 * n
     P = lib.parameters(values)
     y = np.ascontiguousarray(y0, dtype=np.float64)
     handle = lib.new(index, vec.ctypes.data, P.ctypes.data, 1)
     if not handle:
         raise MemoryError("the C simulator could not allocate its work arrays")
-    room = 100 * max(fns.walls, 1) + 8
+    room = 100 * max(spec.walls, 1) + 8
     rec_cap, ev_cap = 1024, 4 * room
     recs, segs, evs, evis = [], [], [], []
     counts = np.zeros(3, dtype=np.int64)
@@ -548,7 +551,7 @@ def run_c(
         "wall_time": _time.perf_counter() - clock,
         "constraint_drift": float(info[14]),
         "impact_condition": float(info[22]),
-        "energy_drift": float(info[15]) if fns.energy_conserved else None,
+        "energy_drift": float(info[15]) if spec.energy_conserved else None,
         "impacts": int(info[17]),
         "grazing": int(info[18]),
         "contacts": int(info[19]),
