@@ -19,7 +19,6 @@ on the number of threads.
 
 from __future__ import annotations
 
-import math
 import os
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
@@ -29,7 +28,8 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.api import CONTACT_MODES, system_for
+from symmech.simulate.api import system_for
+from symmech.simulate.checks import check_run, states
 from symmech.simulate.csim import INFO_HEAD, decode, library, options_vector
 from symmech.simulate.hybrid import Options
 from symmech.simulate.result import EVENT_KINDS, STATUSES
@@ -72,33 +72,6 @@ class BatchResult:
         return self.events[:, 0]
 
 
-def _states(value: object, n: int, what: str) -> np.ndarray:
-    try:
-        a = np.asarray(value)
-    except Exception as exc:
-        raise SimulationError(f"{what}: cannot be read as an array ({exc})") from exc
-    if a.dtype.kind not in "biuf":
-        raise SimulationError(f"{what}: expected real numbers, got dtype {a.dtype}")
-    a = np.array(a, dtype=np.float64, order="C", copy=True)
-    if a.ndim != 2 or a.shape[1] != n or a.shape[0] < 1:
-        raise SimulationError(f"{what}: expected shape (N, {n}) with N >= 1, got {a.shape}")
-    bad = ~np.all(np.isfinite(a), axis=1)
-    if bad.any():
-        row = int(np.argmax(bad))
-        raise SimulationError(f"{what}: row {row} is not finite: {a[row].tolist()}")
-    return a
-
-
-def _positive(value: object, what: str) -> float:
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise SimulationError(f"{what}: expected a positive number, got {value!r}") from exc
-    if not (math.isfinite(x) and x > 0):
-        raise SimulationError(f"{what}: expected a finite positive number, got {value!r}")
-    return x
-
-
 def simulate_batch(
     scene: Scene,
     Q0: Any,
@@ -124,28 +97,22 @@ def simulate_batch(
     (default: every core); the results do not depend on it."""
     if not isinstance(scene, Scene):
         raise SimulationError(f"scene: expected a symmech.Scene, got {type(scene).__name__}")
-    if contact not in CONTACT_MODES:
-        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
+    o = check_run(
+        t0=t0,
+        t_end=t_end,
+        rtol=rtol,
+        atol=atol,
+        max_step=max_step,
+        max_events=max_events,
+        event_samples=event_samples,
+        contact=contact,
+    )
     n = scene.n
-    Q = _states(Q0, n, "Q0")
-    V = _states(V0, n, "V0")
+    Q = states(Q0, n, "Q0", rows=True)
+    V = states(V0, n, "V0", rows=True)
     if Q.shape[0] != V.shape[0]:
         raise SimulationError(f"Q0 and V0: {Q.shape[0]} rows against {V.shape[0]} rows")
-    t0f, tend = float(t0), float(t_end)
-    if not (math.isfinite(t0f) and math.isfinite(tend)):
-        raise SimulationError(f"t0 and t_end must be finite, got {t0!r}, {t_end!r}")
-    if not tend > t0f:
-        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
-    rtol_f = _positive(rtol, "rtol")
-    eps = float(np.finfo(float).eps)
-    if not 100 * eps <= rtol_f < 1:
-        raise SimulationError(f"rtol must lie in [{100 * eps:.3g}, 1), got {rtol!r}")
-    atol_f = _positive(atol, "atol")
-    step_cap = tend - t0f if max_step is None else _positive(max_step, "max_step")
-    if isinstance(max_events, bool) or not isinstance(max_events, int) or max_events < 1:
-        raise SimulationError(f"max_events must be a positive integer, got {max_events!r}")
-    if isinstance(event_samples, bool) or not isinstance(event_samples, int) or event_samples < 1:
-        raise SimulationError(f"event_samples must be a positive integer, got {event_samples!r}")
+    t0f, tend, rtol_f, atol_f = o.t0, o.t_end, o.rtol, o.atol
     if threads is None:
         threads = os.cpu_count() or 1
     if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
@@ -161,7 +128,7 @@ def simulate_batch(
         contact=contact,
         samples=event_samples,
     )
-    index, vec = options_vector(opts, method, step_cap, t0f)
+    index, vec = options_vector(opts, method, o.max_step, t0f)
     _check_rows(fns, values, Q, V, t0f, rtol_f, atol_f)
     lib = library(system)
     P = lib.parameters(values)
