@@ -87,6 +87,8 @@ def test_bouncing_ball_stop_matches_numpy_and_closed_forms(method):
     assert b.accumulation_time == pytest.approx(t_star, abs=1e-7)
     times = np.array([e.time for e in b.impacts()])
     np.testing.assert_allclose(times[:15], ball_impact_times(1.0, 9.81, 0.5, 15), atol=1e-9)
+    # located on the dense output to near machine precision (the flight is a parabola)
+    assert abs(times[0] - math.sqrt(2 / 9.81)) < 50 * np.finfo(float).eps
 
 
 def test_bouncing_ball_persistent_rests_on_the_floor():
@@ -150,6 +152,10 @@ def test_ellipse_with_gravity_matches_numpy():
     ea, eb = a.impacts()[:20], b.impacts()[:20]
     np.testing.assert_allclose([e.time for e in eb], [e.time for e in ea], atol=1e-8)
     assert b.stats["energy_drift"] < 1e-6
+    # never through the floor: psi = y - sqrt(a^2 sin^2 th + b^2 cos^2 th) >= 0 (a=1, b=1/2)
+    th = b.q[:, 2]
+    psi = b.q[:, 1] - np.sqrt(np.sin(th) ** 2 + 0.25 * np.cos(th) ** 2)
+    assert psi.min() >= -1e-9
     ts = np.linspace(0, 3.5, 41)  # DOP853's own dense output (made for the event search)
     np.testing.assert_allclose(b.sol(ts), a.sol(ts), atol=1e-7)
 
