@@ -139,6 +139,28 @@ def test_thousands_of_elastic_bounces_grow_the_buffers():
     assert np.all(np.diff(res.t) >= 0)
 
 
+@pytest.mark.slow
+def test_a_hundred_thousand_events_run_without_a_fixed_cap():
+    params = {"m": 1.0, "g": 9.81, "alpha": 1.0}
+    period = 2 * math.sqrt(2 / 9.81)
+    res = sm.simulate(
+        bouncing_ball(),
+        [1.0],
+        [0.0],
+        100_000 * period,
+        params=params,
+        backend="c",
+        rtol=1e-10,
+        max_events=200_000,
+    )
+    assert res.status == "finished" and res.stats["impacts"] == 100_000
+    times = np.array([e.time for e in res.impacts()])
+    # the energy error of the event states accumulates (5.5e-6 of 9.81 after 1e5 impacts)
+    assert res.stats["energy_drift"] < 1e-5
+    np.testing.assert_allclose(np.diff(times), period, rtol=1e-6)  # each flight
+    assert abs(times[-1] - (100_000 - 0.5) * period) < 0.05  # the phase drifts with it
+
+
 # ------------------------------------------------------------------ the other scenes
 
 
