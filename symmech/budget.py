@@ -20,8 +20,10 @@ Two kinds of reaction, chosen by the stage and documented with each limit:
   measured.  Code generation turns it into the ``linear_solve`` fallback (strategy
   ``auto``) or a :class:`~symmech.codegen.plan.CodegenError` (strategy ``closed_form``).
 
-A test (``tests/test_budget.py``) checks that no module of the package defines another
-budget exception.
+The limits are module attributes read when a stage runs: a user who accepts a longer
+derivation sets, e.g., ``symmech.budget.CLOSED_FORM_SECONDS = 60``.  A test
+(``tests/test_budget.py``) checks that no module of the symbolic layers defines another
+budget exception or threshold.
 """
 
 from __future__ import annotations
@@ -274,17 +276,20 @@ def time_limit(stage: str, seconds: float, budget: str = "CLOSED_FORM_SECONDS") 
     if use_alarm:
 
         def expire(signum: int, frame: object) -> None:
-            raise BudgetExceeded(entry[0], entry[1], "seconds", entry[2])
+            if _DEADLINE.get() is entry:  # a no-op once the block has been left
+                raise BudgetExceeded(entry[0], entry[1], "seconds", entry[2])
 
         previous = signal.signal(signal.SIGALRM, expire)
         signal.setitimer(signal.ITIMER_REAL, max(1e-3, end - now))
     try:
         yield
     finally:
-        if use_alarm:
-            signal.setitimer(signal.ITIMER_REAL, 0)
-            signal.signal(signal.SIGALRM, previous)
-        _DEADLINE.reset(token)
+        try:
+            _DEADLINE.reset(token)  # first: a late alarm then does nothing
+        finally:
+            if use_alarm:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+                signal.signal(signal.SIGALRM, previous)
 
 
 def propagate_time(exc: BudgetExceeded) -> None:
