@@ -33,6 +33,7 @@ evaluations never fail on a bad parameter half way through a run.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -106,10 +107,47 @@ def _number(value: object, what: str) -> float:
     return x
 
 
+@dataclass(frozen=True)
+class _ParameterRules:
+    """What :func:`check_parameters` checks, prepared once per scene."""
+
+    names: tuple[str, ...]
+    positive: tuple[bool, ...]
+    nonnegative: tuple[bool, ...]
+    #: (wall name, restitution as printed, its value as a function of the parameters)
+    restitutions: tuple[tuple[str, str, Any], ...]
+
+
+_RULES: weakref.WeakKeyDictionary[Scene, _ParameterRules] = weakref.WeakKeyDictionary()
+
+
+def _rules(scene: Scene) -> _ParameterRules:
+    rules = _RULES.get(scene)
+    if rules is None:
+        params = list(scene.parameters)
+        restitutions = []
+        for w in scene.walls:
+            alpha = sp.sympify(w.restitution)
+            if alpha.free_symbols:
+                fn = sp.lambdify(params, alpha, modules="math")
+            else:
+                fn = lambda *_, _a=float(alpha): _a
+            restitutions.append((w.name, str(w.restitution), fn))
+        rules = _ParameterRules(
+            tuple(str(p) for p in params),
+            tuple(bool(p.is_positive) for p in params),
+            tuple(bool(p.is_nonnegative) for p in params),
+            tuple(restitutions),
+        )
+        _RULES[scene] = rules
+    return rules
+
+
 def check_parameters(scene: Scene, params: object) -> dict[str, float]:
     """``params`` as ``{name: value}``, every scene parameter given, finite, and with the
     sign its symbol declares (positive, nonnegative) and restitutions in [0, 1]."""
-    names = [str(p) for p in scene.parameters]
+    rules = _rules(scene)
+    names = list(rules.names)
     if params is None:
         params = {}
     if isinstance(params, Mapping):
@@ -128,18 +166,18 @@ def check_parameters(scene: Scene, params: object) -> dict[str, float]:
             f"params: missing {missing}, unknown {unknown}; the scene's parameters are {names}"
         )
     out = {n: _number(given[n], f"params[{n!r}]") for n in names}
-    for p in scene.parameters:
-        x = out[str(p)]
-        if p.is_positive and not x > 0:
-            raise SimulationError(f"params[{str(p)!r}] is declared positive, got {x!r}")
-        if p.is_nonnegative and not x >= 0:
-            raise SimulationError(f"params[{str(p)!r}] is declared non-negative, got {x!r}")
-    subs = {p: sp.Float(out[str(p)]) for p in scene.parameters}
-    for w in scene.walls:
-        alpha = sp.sympify(w.restitution).xreplace(subs)
-        if alpha.is_number and not (0 <= float(alpha) <= 1):
+    for name, pos, nonneg in zip(names, rules.positive, rules.nonnegative, strict=True):
+        x = out[name]
+        if pos and not x > 0:
+            raise SimulationError(f"params[{name!r}] is declared positive, got {x!r}")
+        if nonneg and not x >= 0:
+            raise SimulationError(f"params[{name!r}] is declared non-negative, got {x!r}")
+    values = [out[n] for n in names]
+    for wall, printed, fn in rules.restitutions:
+        alpha = float(fn(*values))
+        if not (0 <= alpha <= 1):
             raise SimulationError(
-                f"wall {w.name!r}: restitution {w.restitution} = {float(alpha)!r} at these"
+                f"wall {wall!r}: restitution {printed} = {alpha!r} at these"
                 " parameters is outside [0, 1]"
             )
     return out
