@@ -128,10 +128,7 @@ def _rules(scene: Scene) -> _ParameterRules:
         restitutions = []
         for w in scene.walls:
             alpha = sp.sympify(w.restitution)
-            if alpha.free_symbols:
-                fn = sp.lambdify(params, alpha, modules="math")
-            else:
-                fn = lambda *_, _a=float(alpha): _a
+            fn = sp.lambdify(params, alpha, modules="math")
             restitutions.append((w.name, str(w.restitution), fn))
         rules = _ParameterRules(
             tuple(str(p) for p in params),
