@@ -28,6 +28,12 @@ class Case:
     t_end: float
     description: str
     overrides: Mapping[str, float] = field(default_factory=dict)
+    #: the case's own name, when a scene has more than one case
+    label: str = ""
+
+    @property
+    def name(self) -> str:
+        return self.label or self.scene_name
 
     def scene(self) -> Scene:
         """The scene (loaded from its built-in scene file)."""
@@ -42,7 +48,7 @@ class Case:
 
 
 CASES: dict[str, Case] = {
-    c.scene_name: c
+    c.name: c
     for c in (
         Case(
             "bouncing_ball",
@@ -57,6 +63,14 @@ CASES: dict[str, Case] = {
             (0.0, 0.0, 2.0),
             6.0,
             "text 001 ellipse dropped from y = 1.5 with spin, alpha = 0.8: rests, then rocks",
+        ),
+        Case(
+            "ellipse_gravity",
+            (0.0, 1.5, 0.3),
+            (0.0, 0.0, 2.0),
+            3.5,
+            "the ellipse's first 11 impacts, before the accumulation (where the baseline works)",
+            label="ellipse_gravity_flight",
         ),
         Case(
             "disk_3_7_gravity",

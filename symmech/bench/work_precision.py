@@ -187,7 +187,7 @@ def rows(
 def format_table(case: Case, ref: Reference, table: Sequence[Row]) -> str:
     """A Markdown table of the rows."""
     lines = [
-        f"### {case.scene_name}: {case.description}",
+        f"### {case.name}: {case.description}",
         f"reference: {ref.source} ({len(ref.impact_times)} impacts, {ref.seconds:.1f} s)",
         "",
         "| route | method | rtol | median time [s] | final error | worst event-time error"
@@ -228,7 +228,7 @@ def plot(case: Case, table: Sequence[Row], path: str) -> None:
                 ax.plot([x], [y], marker="x", color="red", markersize=10)
     ax.set_xlabel("median run time [s]")
     ax.set_ylabel("final-state error (max abs)")
-    ax.set_title(f"work-precision: {case.scene_name} (red x: failed or stopped)")
+    ax.set_title(f"work-precision: {case.name} (red x: failed or stopped)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
