@@ -36,15 +36,17 @@ from symmech.scenefile import (
 
 __version__ = "0.1.0"
 
-_LAZY = ("codegen", "simulate")
+_LAZY = ("codegen", "simulate", "sweep")
 #: Functions re-exported from the lazily imported sub-packages.
 _LAZY_FUNCTIONS = {"simulate_batch": "simulate"}
 
 
 def __getattr__(name: str) -> object:
-    """``symmech.codegen`` and ``symmech.simulate`` are imported on first use (they load
-    jinja2 and ctypes).  The package ``symmech.simulate`` is callable:
-    ``symmech.simulate(scene, q0, v0, t_end, ...)`` is :func:`symmech.simulate.simulate`."""
+    """``symmech.codegen``, ``symmech.simulate`` and ``symmech.sweep`` are imported on first
+    use (they load jinja2, ctypes, and pandas for sweeps).  The packages ``symmech.simulate``
+    and ``symmech.sweep`` are callable: ``symmech.simulate(scene, q0, v0, t_end, ...)`` is
+    :func:`symmech.simulate.simulate`, ``symmech.sweep(scene, grid, t_end, ...)`` is
+    :func:`symmech.sweep.sweep`."""
     import importlib
 
     if name in _LAZY_FUNCTIONS:

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "symmech"
 
 # declaration -> geometry -> constraints -> impacts -> scene -> examples/scene files ->
-# codegen -> simulate -> verify/bench -> cli
+# codegen -> simulate -> sweep -> verify/bench -> cli
 LAYERS = [
     "errors",
     "budget",
@@ -30,6 +30,7 @@ LAYERS = [
     "scenefile",
     "codegen",
     "simulate",
+    "sweep",
     "verify",
     "bench",
     "cli",

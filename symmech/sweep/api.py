@@ -1,0 +1,346 @@
+"""``sweep``: many runs of one scene over a grid of parameters and initial states.
+
+>>> import symmech as sm
+>>> from symmech.examples import bouncing_ball
+>>> table = sm.sweep(bouncing_ball(), {"q0[0]": [1.0, 2.0]}, 10.0, v0=[0.0],
+...                  params={"m": 1, "g": 9.81, "alpha": 0.5}, contact="stop")
+>>> table["status"].tolist()
+['zeno', 'zeno']
+>>> [round(x, 6) for x in table["time_to_rest"]]   # sqrt(2h/g) (1 + 1/2)/(1 - 1/2)
+[1.354571, 1.915653]
+
+Row i of the result is ``simulate(scene, q0_i, v0_i, t_end, params=params_i,
+backend="c", ...)`` summarised (its final state equal to ``res.q[-1]``, ``res.v[-1]`` of
+that run bit for bit): the grid's columns, ``status`` (``"finished"``, ``"zeno"``,
+``"max_events"``, ``"failed"``, or ``"invalid"`` for a run refused by the input checks),
+``message`` (None where finished), ``t_final``, ``<coordinate>_final`` and
+``<velocity>_final``, ``time_to_rest`` (the accumulation time, or the time the body came
+to rest on a wall, of a run that stopped there, as ``res.accumulation_time``; NaN
+otherwise: with ``contact="persistent"`` the loop continues in contact and reports no
+time), ``steps``, ``n_impact``, ``n_grazing``, ``n_contact``, ``n_release`` (events by
+kind) and the chosen ``outputs`` and ``expressions``, indexed by ``run`` (the grid row).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import sympy as sp
+
+from symmech.codegen.build import DEFAULT_FLAGS
+from symmech.declaration.expressions import parse_expression
+from symmech.declaration.symbols import t as TIME
+from symmech.errors import SymmechError
+from symmech.scene import Scene
+from symmech.simulate.api import CONTACT_MODES, system_for
+from symmech.simulate.csim import INFO_HEAD, library, options_vector
+from symmech.simulate.hybrid import Options
+from symmech.simulate.system import Functions, SimulationError
+from symmech.sweep.grid import read_grid, resolve_columns
+from symmech.sweep.plan import FIXED_COLUMNS, INFO_OUTPUTS, Plan
+from symmech.sweep.runner import Progress, run_dask, run_local
+from symmech.sweep.store import Store
+from symmech.sweep.worker import LibrarySource, LoopOptions
+
+__all__ = ["OUTPUTS", "sweep"]
+
+#: The outputs ``sweep`` can add: the energy T + V at the final state, and the C loop's
+#: statistics of each run (``energy_drift`` NaN where the flow does not conserve energy).
+OUTPUTS = ("energy", *INFO_OUTPUTS)
+
+#: Largest default chunk (runs per C call sequence / Dask task).
+MAX_CHUNK = 10_000
+
+
+def _real(value: object, what: str) -> float:
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        raise SimulationError(f"{what}: expected a real number, got {value!r}") from None
+    if isinstance(value, complex) or not math.isfinite(x):
+        raise SimulationError(f"{what}: expected a finite real number, got {value!r}")
+    return x
+
+
+def _positive_int(value: object, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or int(value) < 1:
+        raise SimulationError(f"{what} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def _base_state(value: object, n: int, what: str) -> np.ndarray:
+    if value is None:
+        return np.full(n, np.nan)
+    a = np.asarray(value)
+    if a.dtype.kind not in "biuf" or a.shape != (n,):
+        raise SimulationError(f"{what}: expected {n} real numbers, got {value!r}")
+    a = a.astype(np.float64)
+    if not np.all(np.isfinite(a)):
+        raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
+    return a
+
+
+def _loop(
+    t0: float, t_end: float, rtol: float, atol: float, max_step: float | None,
+    max_events: int, contact: str, samples: int, method: str, width: int,
+) -> tuple[Options, LoopOptions]:  # fmt: skip
+    """The sweep-wide options, checked as :func:`symmech.simulate.simulate` checks them."""
+    t0f, tend = _real(t0, "t0"), _real(t_end, "t_end")
+    if not tend > t0f:
+        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
+    rtol_f, atol_f = _real(rtol, "rtol"), _real(atol, "atol")
+    eps = float(np.finfo(float).eps)
+    if not 100 * eps <= rtol_f < 1:
+        raise SimulationError(f"rtol must lie in [{100 * eps:.3g}, 1), got {rtol!r}")
+    if not atol_f > 0:
+        raise SimulationError(f"atol must be positive, got {atol!r}")
+    cap = tend - t0f if max_step is None else _real(max_step, "max_step")
+    if not cap > 0:
+        raise SimulationError(f"max_step must be positive, got {max_step!r}")
+    if contact not in CONTACT_MODES:
+        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
+    opts = Options(
+        t_end=tend,
+        rtol=rtol_f,
+        atol=atol_f,
+        max_events=_positive_int(max_events, "max_events"),
+        contact=contact,
+        samples=_positive_int(samples, "event_samples"),
+    )
+    index, vec = options_vector(opts, method, cap, t0f)
+    return opts, LoopOptions(t0=t0f, method=index, vector=vec, width=width)
+
+
+def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, Any]:
+    """Each expression (a string, parsed safely, or a sympy expression) in t, the
+    coordinates, velocities and parameters, as a NumPy function of them (in that order)."""
+    if not given:
+        return {}
+    if not isinstance(given, Mapping):
+        raise SimulationError("expressions: expected a mapping {column name: expression}")
+    decl = scene.declaration
+    args = [TIME, *decl.coordinates, *decl.velocities, *scene.parameters]
+    allowed = {str(s): s for s in args}
+    out = {}
+    for name, expr in given.items():
+        if not isinstance(name, str) or not name:
+            raise SimulationError(f"expressions: column names must be strings, got {name!r}")
+        try:
+            e = (
+                parse_expression(expr, allowed, field=f"expressions[{name!r}]")
+                if isinstance(expr, str)
+                else sp.sympify(expr, strict=True)
+            )
+        except (SymmechError, sp.SympifyError, TypeError) as exc:
+            raise SimulationError(f"expressions[{name!r}]: {exc}") from None
+        unknown = sorted(str(s) for s in e.free_symbols if s not in set(args))
+        if unknown:
+            raise SimulationError(
+                f"expressions[{name!r}] uses {unknown}: only t, the coordinates, velocities"
+                f" and parameters {sorted(allowed)}"
+            )
+        out[name] = sp.lambdify(args, e, modules="numpy")
+    return out
+
+
+def _fingerprint(plan: Plan, chunk: int, expressions: Mapping[str, Any] | None) -> str:
+    digest = hashlib.sha256()
+    parts = [
+        plan.source.key,
+        repr(plan.columns.names),
+        repr(sorted(plan.base_params.items())),
+        repr(plan.loop.t0),
+        repr(plan.loop.method),
+        repr(plan.outputs),
+        repr(sorted((k, str(v)) for k, v in (expressions or {}).items())),
+        repr(chunk),
+        repr(plan.runs),
+    ]
+    for part in parts:
+        digest.update(part.encode() + b"\0")
+    for array in (plan.table, plan.base_q, plan.base_v, plan.loop.vector):
+        digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
+    return digest.hexdigest()
+
+
+def _schema(plan: Plan) -> Any:
+    import pyarrow as pa
+
+    ints = {"steps", *(c for c in FIXED_COLUMNS if c.startswith("n_"))}
+    fields = [pa.field("run", pa.int64())]
+    for name in plan.column_names():
+        kind = pa.string() if name in ("status", "message") else pa.float64()
+        fields.append(pa.field(name, pa.int64() if name in ints else kind))
+    return pa.schema(fields)
+
+
+def sweep(
+    scene: Scene,
+    grid: Any,
+    t_end: float,
+    *,
+    params: Mapping[str, float] | None = None,
+    q0: Any = None,
+    v0: Any = None,
+    outputs: Sequence[str] = ("energy",),
+    expressions: Mapping[str, Any] | None = None,
+    client: Any = None,
+    chunk: int | None = None,
+    threads: int | None = None,
+    store: str | os.PathLike[str] | None = None,
+    progress: bool | None = None,
+    t0: float = 0.0,
+    method: str = "dop853",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    max_step: float | None = None,
+    max_events: int = 100_000,
+    contact: str = "persistent",
+    strategy: str = "auto",
+    definitions: Mapping | None = None,
+    event_samples: int = 8,
+) -> Any:
+    """Run ``scene`` for every row of ``grid`` and return a pandas DataFrame, one row per
+    run (see the module docstring and :mod:`symmech.sweep.grid` for the columns).
+
+    ``params``, ``q0``, ``v0``: the values no grid column sets.  ``outputs``: names from
+    :data:`OUTPUTS`; ``expressions``: ``{column: expression}`` evaluated at each final
+    state (strings are parsed by symmech's whitelist parser, never evaluated).  Without
+    ``client`` the chunks run in ``threads`` threads (default: every core); with a
+    ``dask.distributed.Client`` they run as Dask tasks on its cluster.  ``chunk``: runs per
+    chunk (default ``ceil(N / (4 workers))``, at most 10^4).  ``store``: a folder that
+    receives each finished chunk as a Parquet part; a rerun of the same sweep skips the
+    chunks stored (:mod:`symmech.sweep.store`).  ``progress``: a progress bar on stderr
+    (default: on a terminal, after a second).  The other options are
+    :func:`symmech.simulate.simulate`'s, shared by every run.  The results do not depend on
+    ``chunk``, ``threads`` or the route: each run is independent and runs the same C code.
+    """
+    if not isinstance(scene, Scene):
+        raise SimulationError(f"scene: expected a symmech.Scene, got {type(scene).__name__}")
+    try:
+        import pandas  # noqa: F401
+        import pyarrow  # noqa: F401
+    except ImportError as exc:
+        raise SimulationError(
+            f"sweep needs pandas and pyarrow ({exc}): python3 -m pip install 'symmech[sweep]'"
+        ) from None
+    names, table = read_grid(grid)
+    columns = resolve_columns(scene, names)
+    n = scene.n
+    pnames = [str(p) for p in scene.parameters]
+    given = {} if params is None else params
+    if not isinstance(given, Mapping):
+        raise SimulationError(f"params: expected a mapping name -> value, got {params!r}")
+    unknown = sorted(str(k) for k in given if str(k) not in pnames)
+    if unknown:
+        raise SimulationError(f"params: unknown {unknown}; the scene's parameters are {pnames}")
+    base_params = {str(k): _real(v, f"params[{str(k)!r}]") for k, v in given.items()}
+    set_p = {pnames[i] for i in columns.params if i >= 0}
+    missing = [p for p in pnames if p not in base_params and p not in set_p]
+    base_q = _base_state(q0, n, "q0")
+    base_v = _base_state(v0, n, "v0")
+    decl = scene.declaration
+    for what, base, index, syms in (
+        ("q0", base_q, columns.q, decl.coordinates),
+        ("v0", base_v, columns.v, decl.velocities),
+    ):
+        if np.isnan(base).any():
+            free = [str(syms[i]) for i in range(n) if i not in index]
+            if free:
+                missing.append(f"{what} (no column sets {free} and {what} is not given)")
+    if missing:
+        raise SimulationError(f"sweep: missing values for {missing}")
+    unknown_out = [o for o in outputs if o not in OUTPUTS] if not isinstance(outputs, str) else []
+    if isinstance(outputs, str) or unknown_out:
+        raise SimulationError(
+            f"outputs: expected a sequence of names from {OUTPUTS}, got {outputs!r}"
+        )
+    exprs = _expressions(scene, expressions)
+    taken = set(names) | set(FIXED_COLUMNS) | {"run"}
+    taken |= {f"{s}_final" for s in [*decl.coordinates, *decl.velocities]}
+    clash = sorted(({*outputs} | set(exprs)) & taken) + sorted(set(outputs) & set(exprs))
+    if clash or len(set(outputs)) != len(outputs):
+        raise SimulationError(f"outputs and expressions: repeated column names {clash}")
+    if threads is None:
+        threads = os.cpu_count() or 1
+    threads = _positive_int(threads, "threads")
+    if client is not None and not (hasattr(client, "submit") and hasattr(client, "scatter")):
+        raise SimulationError(
+            f"client: expected a dask.distributed.Client, got {type(client).__name__}"
+        )
+    opts, loop = _loop(
+        t0, t_end, rtol, atol, max_step, max_events, contact, event_samples, method,
+        INFO_HEAD + 2 * n,
+    )  # fmt: skip
+    system = system_for(scene, "c", strategy, definitions)
+    fns = Functions(system, {p: 1.0 for p in pnames})
+    lib = library(system)
+    plan = Plan(
+        scene=scene,
+        system=system,
+        parameters_of=lib.parameters,
+        columns=columns,
+        table=table,
+        base_params=base_params,
+        base_q=base_q,
+        base_v=base_v,
+        options=opts,
+        loop=loop,
+        source=LibrarySource(tuple(sorted(lib.sources.items())), lib.spec.prefix, DEFAULT_FLAGS),
+        outputs=tuple(outputs),
+        energy_conserved=fns.energy_conserved,
+        expressions=exprs,
+    )
+    return _execute(plan, client, chunk, threads, store, progress, expressions)
+
+
+def _execute(
+    plan: Plan, client: Any, chunk: int | None, threads: int, store: Any, progress: Any,
+    expressions: Any,
+) -> Any:  # fmt: skip
+    import pyarrow as pa
+
+    N = plan.runs
+    workers = threads
+    if client is not None:
+        workers = max(1, sum(client.nthreads().values()))
+    if chunk is None and store is not None:
+        chunk = Store.stored_chunk(store)
+    if chunk is None:
+        chunk = max(1, min(MAX_CHUNK, -(-N // (4 * workers))))
+    chunk = _positive_int(chunk, "chunk")
+    fingerprint = _fingerprint(plan, chunk, expressions)
+    schema = _schema(plan)
+    chunks = [(k, lo, min(lo + chunk, N)) for k, lo in enumerate(range(0, N, chunk))]
+    tables: dict[int, Any] = {}
+    saver = None
+    if store is not None:
+        saver = Store(store, fingerprint, N, chunk)
+        done = saver.open()
+        chunks = [c for c in chunks if c[0] not in done]
+    bar = Progress(sum(hi - lo for _, lo, hi in chunks), progress)
+
+    def sink(k: int, cols: dict) -> None:
+        t = pa.table(cols, schema=schema)
+        if saver is not None:
+            saver.write(k, t)
+        else:
+            tables[k] = t
+        bar.update(t.num_rows)
+
+    try:
+        if client is None:
+            run_local(plan, chunks, threads, sink)
+        else:
+            run_dask(plan, chunks, client, 2 * workers, sink, fingerprint[:16])
+    finally:
+        bar.close()
+    full = saver.read(schema) if saver is not None else pa.concat_tables(
+        [tables[k] for k in sorted(tables)]
+    )  # fmt: skip
+    return full.to_pandas().set_index("run")

@@ -1,0 +1,262 @@
+"""sm.sweep on one machine: every row equals its own sm.simulate run bit for bit, the table
+does not depend on chunks or threads, failures are rows, a stopped sweep resumes from its
+Parquet store, bad grids are refused naming the column."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import sympy as sp
+
+pd = pytest.importorskip("pandas", reason="sm.sweep needs pandas (the sweep/test extra)")
+pytest.importorskip("pyarrow", reason="sm.sweep needs pyarrow (the sweep/test extra)")
+
+import symmech as sm  # noqa: E402
+from symmech.bench.cases import case  # noqa: E402
+from symmech.examples import bouncing_ball  # noqa: E402
+from symmech.simulate import SimulationError  # noqa: E402
+from symmech.sweep import runner  # noqa: E402
+
+BALL = {"m": 1.0, "g": 9.81, "alpha": 0.5}
+
+
+@pytest.fixture(scope="module")
+def ellipse():
+    c = case("ellipse_gravity")
+    return c.scene(), c.params(), c
+
+
+@pytest.fixture(scope="module")
+def quartic():
+    """A 1-D particle in V = k x^4 with a wall at x = -1: the energy overflows for huge x,
+    so the C loop stops with status "failed"."""
+    (x,) = sm.coordinates("x")
+    k = sp.Symbol("k", positive=True)
+    wall = sm.Wall(x + 1, restitution=1, name="left")
+    return sm.Scene((x,), metric=sp.Matrix([[1]]), potential=k * x**4, walls=[wall], name="q4")
+
+
+def _ellipse_grid():
+    return sm.sweep.product(alpha=[0.3, 0.8, 1.0], theta0=[0.0, 0.7, 1.9])
+
+
+def test_rows_equal_their_own_simulate_runs_bit_for_bit(ellipse):
+    scene, params, c = ellipse
+    grid = _ellipse_grid()
+    base = {k: v for k, v in params.items() if k != "alpha"}
+    for contact in ("persistent", "stop"):
+        tab = sm.sweep(scene, grid, 2.0, params=base, q0=c.q0, v0=c.v0, contact=contact, threads=2)
+        assert list(tab.index) == list(range(9))
+        for i, row in tab.iterrows():
+            p = {**base, "alpha": grid["alpha"][i]}
+            q0 = [c.q0[0], c.q0[1], grid["theta0"][i]]
+            res = sm.simulate(scene, q0, c.v0, 2.0, params=p, contact=contact)
+            assert row["status"] == res.status
+            assert (pd.isna(row["message"]) and res.status == "finished") or (
+                row["message"] == res.message
+            )
+            assert row["t_final"] == res.t[-1]
+            assert [row["x_final"], row["y_final"], row["theta_final"]] == res.q[-1].tolist()
+            final_v = [row["xdot_final"], row["ydot_final"], row["thetadot_final"]]
+            assert final_v == res.v[-1].tolist()
+            for kind, stat in (("impact", "impacts"), ("contact", "contacts")):
+                assert row[f"n_{kind}"] == res.stats[stat]
+            if res.accumulation_time is None:
+                assert math.isnan(row["time_to_rest"])
+            else:
+                assert row["time_to_rest"] == res.accumulation_time
+            # energy at the end, by hand: T + V of the text's ellipse
+            m, inertia, g = p["m"], p["I"], p["g"]
+            by_hand = 0.5 * m * (final_v[0] ** 2 + final_v[1] ** 2)
+            by_hand += 0.5 * inertia * final_v[2] ** 2 + m * g * row["y_final"]
+            assert row["energy"] == pytest.approx(by_hand, rel=1e-13, abs=1e-13)
+    # contact="stop": at alpha = 0.3 the ellipse comes to rest before t = 2, elastic never
+    assert (tab["status"][tab["alpha"] == 0.3] == "zeno").all()
+    assert (tab["status"][tab["alpha"] == 1.0] == "finished").all()
+
+
+def test_table_is_the_same_whatever_the_chunks_and_threads(ellipse):
+    scene, params, c = ellipse
+    grid = sm.sweep.product(alpha=[0.5, 0.9], theta0=np.linspace(0, 3, 7))
+    base = {k: v for k, v in params.items() if k != "alpha"}
+    kw = {"params": base, "q0": c.q0, "v0": c.v0, "contact": "stop"}
+    one = sm.sweep(scene, grid, 3.0, threads=1, chunk=14, **kw)
+    two = sm.sweep(scene, grid, 3.0, threads=2, chunk=3, **kw)
+    odd = sm.sweep(scene, grid, 3.0, threads=2, chunk=1, **kw)
+    pd.testing.assert_frame_equal(one, two, check_exact=True)
+    pd.testing.assert_frame_equal(one, odd, check_exact=True)
+
+
+def test_grid_as_dataframe_and_as_dict_agree():
+    grid = {"q0[0]": [1.0, 1.5, 2.0], "alpha": [0.5, 0.6, 0.7]}
+    a = sm.sweep(bouncing_ball(), grid, 1.0, v0=[0.0], params={"m": 1, "g": 9.81})
+    b = sm.sweep(bouncing_ball(), pd.DataFrame(grid), 1.0, v0=[0.0], params={"m": 1, "g": 9.81})
+    pd.testing.assert_frame_equal(a, b, check_exact=True)
+    assert a["q0[0]"].tolist() == grid["q0[0]"]
+
+
+def test_product_is_every_combination_first_name_slowest():
+    g = sm.sweep.product(a=[1, 2], b=[10, 20, 30])
+    pairs = list(zip(g["a"].tolist(), g["b"].tolist(), strict=True))
+    assert pairs == [(a, b) for a in (1, 2) for b in (10, 20, 30)]
+
+
+def test_ball_columns_against_the_closed_form():
+    """Dropped from h at rest with contact="stop": t* = sqrt(2h/g)(1 + alpha)/(1 - alpha)."""
+    h = np.array([0.5, 1.0, 3.0])
+    alpha = np.array([0.2, 0.5, 0.7])
+    tab = sm.sweep(
+        bouncing_ball(), {"y0": h, "alpha": alpha}, 20.0, v0=[0.0],
+        params={"m": 2.0, "g": 9.81}, contact="stop", outputs=("energy", "rhs_calls"),
+    )  # fmt: skip
+    t_star = np.sqrt(2 * h / 9.81) * (1 + alpha) / (1 - alpha)
+    assert np.allclose(tab["time_to_rest"], t_star, rtol=1e-7)
+    assert (tab["status"] == "zeno").all() and (tab["n_impact"] > 5).all()
+    assert np.allclose(tab["energy"], 2.0 * 9.81 * tab["y_final"] + tab["ydot_final"] ** 2)
+    assert (tab["rhs_calls"] > 0).all()
+
+
+def test_failures_are_rows(quartic):
+    tab = sm.sweep(
+        quartic, {"x0": [0.5, 1e200, -2.0, np.nan], "k": [1.0, 1.0, 1.0, 1.0]}, 1.0, v0=[0.0]
+    )
+    assert tab["status"].tolist() == ["finished", "failed", "invalid", "invalid"]
+    assert "energy failed" in tab.loc[1, "message"]
+    assert "wrong side of wall 'left'" in tab.loc[2, "message"]
+    assert "finite" in tab.loc[3, "message"]
+    assert math.isnan(tab.loc[2, "x_final"]) and tab.loc[2, "n_impact"] == 0
+    # the ball bounces more than 3 times before t = 5: status "max_events"
+    many = sm.sweep(
+        bouncing_ball(), {"y0": [1.0, 2.0], "alpha": [0.5, 1.5]}, 5.0, v0=[0.0],
+        params={"m": 1, "g": 9.81}, max_events=3,
+    )  # fmt: skip
+    assert many["status"].tolist() == ["max_events", "invalid"]
+    assert "stopped after 3 events" in many.loc[0, "message"]
+    assert "restitution" in many.loc[1, "message"]
+
+
+def test_a_chunk_that_cannot_run_is_failed_rows(monkeypatch):
+    real = runner.run_chunk
+
+    def flaky(source, chunk, options):
+        if chunk.index == 1:
+            raise MemoryError("the C simulator could not allocate its work arrays")
+        return real(source, chunk, options)
+
+    monkeypatch.setattr(runner, "run_chunk", flaky)
+    tab = sm.sweep(
+        bouncing_ball(), {"y0": [1.0, 1.1, 1.2, 1.3]}, 1.0, v0=[0.0], params=BALL,
+        chunk=2, threads=1,
+    )  # fmt: skip
+    assert tab["status"].tolist() == ["finished", "finished", "failed", "failed"]
+    assert "could not allocate" in tab.loc[2, "message"]
+
+
+def test_resume_from_a_partial_store(tmp_path, monkeypatch):
+    grid = {"y0": np.linspace(0.5, 2.0, 10), "alpha": np.linspace(0.3, 0.9, 10)}
+    kw = {"v0": [0.0], "params": {"m": 1, "g": 9.81}, "chunk": 3, "threads": 1}
+    full = sm.sweep(bouncing_ball(), grid, 2.0, **kw)
+    store = tmp_path / "out.parquet"
+    real = runner.finish
+    calls: list[int] = []
+
+    def stop_at_third(plan, prep, info, error):
+        calls.append(prep.index)
+        if len(calls) == 3:
+            raise KeyboardInterrupt  # the sweep is stopped half way
+        return real(plan, prep, info, error)
+
+    monkeypatch.setattr(runner, "finish", stop_at_third)
+    with pytest.raises(KeyboardInterrupt):
+        sm.sweep(bouncing_ball(), grid, 2.0, store=store, **kw)
+    parts = sorted(p.name for p in store.glob("part-*.parquet"))
+    assert parts == ["part-00000000.parquet", "part-00000001.parquet"]
+    calls.clear()
+    monkeypatch.setattr(runner, "finish", lambda *a: (calls.append(a[1].index), real(*a))[1])
+    resumed = sm.sweep(bouncing_ball(), grid, 2.0, store=store, **kw)
+    assert calls == [2, 3]  # only the missing chunks ran
+    pd.testing.assert_frame_equal(resumed, full, check_exact=True)
+    pd.testing.assert_frame_equal(pd.read_parquet(store).set_index("run"), full, check_exact=True)
+    # a store of another sweep is refused, not mixed in
+    with pytest.raises(SimulationError, match="holds another sweep"):
+        sm.sweep(bouncing_ball(), grid, 3.0, store=store, **kw)
+
+
+@pytest.mark.parametrize(
+    ("grid", "match"),
+    [
+        ({"beta": [1.0]}, "'beta' is not a parameter nor an initial value"),
+        ({"y": [1.0]}, "the initial value of y is the column 'y0'"),
+        ({"q0[3]": [1.0]}, "the scene has 1 coordinates"),
+        ({"y0": [1.0], "q0[0]": [2.0]}, "'y0' and 'q0\\[0\\]' set the same quantity"),
+        ({"y0": [1.0, 2.0], "alpha": [0.5]}, "differ in length"),
+        ({"y0": ["a"]}, "expected real numbers"),
+        ({"y0": [[1.0]]}, "1-D array"),
+        ({}, "no columns"),
+        ([1.0, 2.0], "expected a dict"),
+    ],
+)
+def test_bad_grids_are_refused_naming_the_column(grid, match):
+    with pytest.raises(SimulationError, match=match):
+        sm.sweep(bouncing_ball(), grid, 1.0, v0=[0.0], params=BALL)
+
+
+def test_bad_arguments_are_refused():
+    ball = bouncing_ball()
+    with pytest.raises(SimulationError, match="missing values for \\['alpha'\\]"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0.0], params={"m": 1, "g": 9.81})
+    with pytest.raises(SimulationError, match="no column sets \\['ydot'\\]"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, params=BALL)
+    with pytest.raises(SimulationError, match="unknown \\['mass'\\]"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params={**BALL, "mass": 1})
+    with pytest.raises(SimulationError, match="outputs"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, outputs=("power",))
+    with pytest.raises(SimulationError, match="t_end must be greater"):
+        sm.sweep(ball, {"y0": [1.0]}, 0.0, v0=[0], params=BALL)
+    with pytest.raises(SimulationError, match="chunk must be a positive integer"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, chunk=0)
+    with pytest.raises(SimulationError, match=r"expected a dask\.distributed\.Client"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, client="tcp://x:8786")
+    with pytest.raises(SimulationError, match=r"expected a symmech\.Scene"):
+        sm.sweep("ball", {"y0": [1.0]}, 1.0)
+
+
+def test_expressions_are_parsed_safely_and_evaluated_at_the_end():
+    tab = sm.sweep(
+        bouncing_ball(), {"y0": [1.0, 2.0]}, 0.3, v0=[0.0], params=BALL,
+        expressions={"height_cm": "100*y", "momentum": "m*ydot"},
+    )  # fmt: skip
+    assert tab["height_cm"].tolist() == pytest.approx((100 * tab["y_final"]).tolist())
+    # free fall before the first impact: y = h - g t^2/2, ydot = -g t
+    assert tab["y_final"].tolist() == pytest.approx([1 - 9.81 * 0.045, 2 - 9.81 * 0.045])
+    assert tab["momentum"].tolist() == pytest.approx([-9.81 * 0.3] * 2)
+    with pytest.raises(SimulationError, match="expressions\\['x'\\]"):
+        sm.sweep(bouncing_ball(), {"y0": [1.0]}, 0.3, v0=[0.0], params=BALL,
+                 expressions={"x": "__import__('os').system('true')"})  # fmt: skip
+    with pytest.raises(SimulationError, match="uses \\['z'\\]"):
+        sm.sweep(bouncing_ball(), {"y0": [1.0]}, 0.3, v0=[0.0], params=BALL,
+                 expressions={"x": sp.Symbol("z")})  # fmt: skip
+
+
+def test_progress_bar_on_request_only(capsys):
+    grid = {"y0": [1.0, 2.0, 3.0]}
+    sm.sweep(bouncing_ball(), grid, 1.0, v0=[0.0], params=BALL, chunk=1)
+    assert capsys.readouterr().err == ""  # not a terminal: no bar
+    sm.sweep(bouncing_ball(), grid, 1.0, v0=[0.0], params=BALL, chunk=1, progress=True)
+    err = capsys.readouterr().err
+    assert "sweep [" in err and "3/3 runs" in err and err.endswith("\n")
+
+
+def test_import_symmech_loads_neither_pandas_nor_dask():
+    code = "import sys, symmech\nprint(sorted({m.split('.')[0] for m in sys.modules}))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    for heavy in ("pandas", "pyarrow", "dask", "distributed"):
+        assert f"'{heavy}'" not in out.stdout
+    code = "import symmech as sm; print(callable(sm.sweep), sm.sweep.product.__name__)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.split() == ["True", "product"], out.stderr
