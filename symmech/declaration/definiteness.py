@@ -17,7 +17,9 @@ coordinates:
      each coordinate (from its assumptions; ``sin`` and ``cos`` in [-1, 1], even powers
      nonnegative): for a diagonal metric each diagonal entry has a lower bound >= 0; for
      n <= 3 the leading principal minors ``D_1, ..., D_{n-1}`` have lower bounds > 0 and
-     ``det g`` >= 0 (Sylvester's criterion, with the limit case det g = 0);
+     ``det g`` >= 0 (Sylvester's criterion, with the limit case det g = 0); for any n, the
+     pivots of an LDL^T factorisation in interval arithmetic have lower bounds > 0 (the
+     last >= 0);
    * exact real roots (:func:`sympy.real_roots`) of a diagonal entry that is a polynomial
      in one coordinate: it is nonnegative iff it is between and beyond its roots;
 
@@ -405,6 +407,8 @@ def _full(
         if all(b is not None for b in bounds) and all(b > 0 for b in bounds[:-1]):
             if bounds[-1] >= 0:
                 return None
+    if _interval_cholesky(G, fixed):
+        return None
     value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q)
     if value < 0:
         confirmed = _confirm(G, where, sample, q)
@@ -412,10 +416,38 @@ def _full(
             return Verdict("refuted", confirmed[1], confirmed[0])
     undecided.append(
         "not proven positive definite for every value of the coordinates (interval bounds"
-        f"{' of its leading minors' if n <= MINORS_MAX_N else ''} do not prove it), and a"
-        " local search from the sampled points found no point where it is indefinite"
+        f" of{' its leading minors and' if n <= MINORS_MAX_N else ''} its Cholesky pivots do"
+        " not prove it), and a local search from the sampled points found no point where it"
+        " is indefinite"
     )
     return None
+
+
+def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
+    """Whether the LDL^T factorisation of ``G`` in interval arithmetic (entries enclosed
+    over the coordinates' ranges, :func:`lower_bound`'s rules) has pivots with lower bounds
+    > 0 (the last >= 0): then every matrix with entries in those enclosures, g(q) among
+    them, is positive (semi)definite.  The entries are taken as independent, so the test
+    is sufficient, not necessary."""
+    n = G.rows
+    try:
+        with mpmath.workprec(53):
+            memo: dict = {}
+            A = [[_interval(G[i, j], fixed, memo) for j in range(n)] for i in range(n)]
+            if any(a is None for row in A for a in row):
+                return False
+            for k in range(n):
+                pivot = A[k][k]
+                if not (_lo(pivot) > 0 or (k == n - 1 and _lo(pivot) >= 0)):
+                    return False
+                for i in range(k + 1, n):
+                    for j in range(i, n):
+                        product = A[i][k] ** 2 if i == j else A[i][k] * A[k][j]
+                        A[i][j] = A[i][j] - product / pivot
+                        A[j][i] = A[i][j]
+            return True
+    except (ArithmeticError, ValueError, TypeError, RecursionError):
+        return False
 
 
 def _short(expr: object, limit: int = 50) -> str:
