@@ -1,0 +1,136 @@
+"""sm.sweep on a real Dask LocalCluster (2 worker processes, loopback only): the same table
+as the local run bit for bit, the library loaded once per worker, failures as rows, a lost
+worker costing no finished chunk, and a resumable store."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+pd = pytest.importorskip("pandas", reason="sm.sweep needs pandas (the sweep/test extra)")
+pytest.importorskip("pyarrow", reason="sm.sweep needs pyarrow (the sweep/test extra)")
+distributed = pytest.importorskip(
+    "distributed", reason="the cluster route needs dask.distributed (the sweep/test extra)"
+)
+
+import symmech as sm  # noqa: E402
+from symmech.bench.cases import case  # noqa: E402
+from symmech.examples import bouncing_ball  # noqa: E402
+from symmech.sweep import runner  # noqa: E402
+from symmech.sweep.worker import loaded_libraries  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(
+        n_workers=2,
+        processes=True,
+        threads_per_worker=1,
+        host="127.0.0.1",
+        dashboard_address=None,
+    )
+    with cluster, distributed.Client(cluster) as c:
+        yield c
+
+
+@pytest.fixture(scope="module")
+def ellipse():
+    c = case("ellipse_gravity")
+    base = {k: v for k, v in c.params().items() if k != "alpha"}
+    return c.scene(), {"params": base, "q0": c.q0, "v0": c.v0}
+
+
+def test_cluster_table_equals_local_table_bit_for_bit(client, ellipse):
+    scene, kw = ellipse
+    grid = sm.sweep.product(alpha=np.linspace(0.1, 1.0, 5), theta0=np.linspace(0, 3, 8))
+    grid["theta0"][3] = np.nan  # an invalid row travels as a row
+    local = sm.sweep(scene, grid, 3.0, chunk=7, threads=2, **kw)
+    remote = sm.sweep(scene, grid, 3.0, chunk=7, client=client, **kw)
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+    assert local.loc[3, "status"] == "invalid"
+    assert (local["status"] != "invalid").sum() == 39
+    # another chunking on the cluster: still the same table
+    again = sm.sweep(scene, grid, 3.0, chunk=40, client=client, **kw)
+    pd.testing.assert_frame_equal(local, again, check_exact=True)
+    # every worker process compiled or loaded the library once, and holds only it
+    assert set(client.run(loaded_libraries).values()) == {1}
+
+
+def test_failures_on_the_cluster_are_rows(client):
+    grid = {"y0": [1.0, -1.0, 2.0], "alpha": [0.5, 0.5, 0.5]}
+    kw = {"v0": [0.0], "params": {"m": 1, "g": 9.81}, "max_events": 3, "chunk": 1}
+    remote = sm.sweep(bouncing_ball(), grid, 5.0, client=client, **kw)
+    assert remote["status"].tolist() == ["max_events", "invalid", "max_events"]
+    pd.testing.assert_frame_equal(
+        remote, sm.sweep(bouncing_ball(), grid, 5.0, **kw), check_exact=True
+    )
+
+
+def test_a_task_that_raises_on_a_worker_is_failed_rows(client, monkeypatch):
+    """A worker that cannot run a chunk (here: its library source does not compile)
+    reports failed rows naming the error; the sweep returns."""
+    from dataclasses import replace
+
+    from symmech.sweep import api
+
+    real = runner.run_dask
+
+    def broken_source(plan, *args):
+        bad = replace(plan.source, files=(("broken.c", "this is not C"),))
+        return real(replace(plan, source=bad), *args)
+
+    monkeypatch.setattr(api, "run_dask", broken_source)
+    tab = sm.sweep(
+        bouncing_ball(), {"y0": [1.0, 2.0]}, 1.0, v0=[0.0],
+        params={"m": 1, "g": 9.81, "alpha": 0.5}, client=client, chunk=1,
+    )  # fmt: skip
+    assert tab["status"].tolist() == ["failed", "failed"]
+    assert "failed on the cluster: CompileError" in tab.loc[0, "message"]
+
+
+def test_a_lost_worker_loses_no_finished_chunk(client, ellipse, monkeypatch):
+    scene, kw = ellipse
+    grid = sm.sweep.product(alpha=np.linspace(0.2, 0.9, 8), theta0=np.linspace(0, 3, 40))
+    local = sm.sweep(scene, grid, 4.0, chunk=16, threads=2, **kw)
+    real = runner.finish
+    killed: list[str] = []
+
+    def kill_one_worker_after_the_first_chunk(plan, prep, info, error):
+        if not killed:
+            victim = sorted(client.scheduler_info()["workers"])[0]
+            killed.append(victim)
+            try:
+                client.run(os._exit, 1, workers=[victim])
+            except Exception:  # the worker dies before it can answer
+                pass
+        return real(plan, prep, info, error)
+
+    monkeypatch.setattr(runner, "finish", kill_one_worker_after_the_first_chunk)
+    remote = sm.sweep(scene, grid, 4.0, chunk=16, client=client, **kw)
+    assert killed and killed[0] not in client.scheduler_info()["workers"]  # it did die
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+    client.wait_for_workers(2, timeout=60)  # the nanny restarts it for the next tests
+
+
+def test_cluster_store_resumes(client, tmp_path, monkeypatch):
+    grid = {"y0": np.linspace(0.5, 2.0, 12), "alpha": np.linspace(0.3, 0.9, 12)}
+    kw = {"v0": [0.0], "params": {"m": 1, "g": 9.81}, "chunk": 4}
+    store = tmp_path / "ball.parquet"
+    first = sm.sweep(bouncing_ball(), grid, 2.0, client=client, store=store, **kw)
+    (store / "part-00000001.parquet").unlink()
+    calls: list[int] = []
+    real = runner.finish
+
+    def counting(plan, prep, info, error):
+        calls.append(prep.index)
+        return real(plan, prep, info, error)
+
+    monkeypatch.setattr(runner, "finish", counting)
+    resumed = sm.sweep(bouncing_ball(), grid, 2.0, client=client, store=store, **kw)
+    assert calls == [1]
+    pd.testing.assert_frame_equal(first, resumed, check_exact=True)
+    pd.testing.assert_frame_equal(
+        first, sm.sweep(bouncing_ball(), grid, 2.0, **kw), check_exact=True
+    )
