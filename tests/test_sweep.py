@@ -260,3 +260,43 @@ def test_import_symmech_loads_neither_pandas_nor_dask():
     code = "import symmech as sm; print(callable(sm.sweep), sm.sweep.product.__name__)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.stdout.split() == ["True", "product"], out.stderr
+
+
+def _sweep_args(argv: list[str]):
+    import argparse
+
+    from symmech.sweep.command import add_command
+
+    parser = argparse.ArgumentParser(prog="symmech")
+    common = argparse.ArgumentParser(add_help=False)
+    add_command(parser.add_subparsers(dest="command"), common)
+    return parser.parse_args(["sweep", *argv])
+
+
+def test_command_writes_the_table_of_sm_sweep(tmp_path, capsys):
+    from symmech.scenefile import read_scene
+    from symmech.sweep.command import run_command
+
+    grid = pd.DataFrame({"y0": [1.0, 2.0, -1.0], "alpha": [0.5, 0.7, 0.5]})
+    grid.to_csv(tmp_path / "grid.csv", index=False)
+    grid.to_parquet(tmp_path / "grid.parquet")
+    said: list[str] = []
+    expected = sm.sweep(bouncing_ball(), grid, 1.0, v0=[0.0], params={**BALL, "m": 2.0}, threads=1)
+    for grid_file, out in (("grid.csv", "out.parquet"), ("grid.parquet", "out.csv")):
+        argv = ["bouncing_ball", "--grid", str(tmp_path / grid_file), "--out"]
+        argv += [str(tmp_path / out), "--t-end", "1", "--v0", "0", "--param", "m=2"]
+        assert run_command(_sweep_args(argv), read_scene, said.append) == 0
+        printed = capsys.readouterr().out
+        assert "finished: 2" in printed and "invalid: 1" in printed
+    assert said and "3 runs" in said[0]
+    stored = pd.read_parquet(tmp_path / "out.parquet").set_index("run")
+    pd.testing.assert_frame_equal(stored, expected, check_exact=True)
+    written = pd.read_csv(tmp_path / "out.csv", index_col="run")
+    assert written["status"].tolist() == expected["status"].tolist()
+    assert np.allclose(written["y_final"][:2], expected["y_final"][:2], rtol=1e-15, atol=0)
+    with pytest.raises(sm.SymmechError, match="--out"):
+        run_command(_sweep_args([*argv[:4], "out.txt", "--t-end", "1"]), read_scene, print)
+    (tmp_path / "grid.txt").write_text("y0\n1\n")
+    bad = ["bouncing_ball", "--grid", str(tmp_path / "grid.txt"), "--out", str(tmp_path / "o.csv")]
+    with pytest.raises(sm.SymmechError, match="--grid"):
+        run_command(_sweep_args([*bad, "--t-end", "1"]), read_scene, print)
