@@ -12,6 +12,7 @@ returns None for anything else, so that the general path converts or explains.
 from __future__ import annotations
 
 import ctypes
+import math
 import threading
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -120,7 +121,8 @@ def c_raw(
 
     def parameters_hold(p: np.ndarray) -> bool:
         """Whether one parameter vector is finite and within its declared ranges."""
-        return all(bool(np.isfinite(p[r.index])) and bool(r.holds(p[r.index])) for r in rules)
+        values = p.tolist()
+        return all(math.isfinite(values[r.index]) and r.holds_value(values[r.index]) for r in rules)
 
     def fast_buffers() -> tuple[list[np.ndarray], list[int]]:
         """Per-thread buffers of the fast path, in the order of the function's arguments."""

@@ -173,6 +173,7 @@ def generate(
         "callees": {f.name: f for f in lowered},
         "steps": steps,
         "solves": any(f.solve for f in lowered),
+        "scaled": any(f.scaled for f in lowered),
         "step_docs": STEP_DOCS,
         "prefix": f"{stem}_",
         "header": f"{stem}.h",

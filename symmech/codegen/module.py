@@ -239,9 +239,10 @@ class SceneModule:
             if len(hits) > 1:
                 raise CodegenError(f"walls {hits} are all named {wall!r}; pass the index")
             return hits[0]
-        if isinstance(wall, bool | np.bool_) or not isinstance(wall, int | np.integer):
-            raise CodegenError(f"wall must be an index or a name, got {wall!r}")
-        wall = int(wall)
+        if type(wall) is not int:  # the common case first: a plain int
+            if isinstance(wall, bool | np.bool_) or not isinstance(wall, int | np.integer):
+                raise CodegenError(f"wall must be an index or a name, got {wall!r}")
+            wall = int(wall)
         if not -len(self.walls) <= wall < len(self.walls):
             raise CodegenError(f"wall index {wall} out of range: {len(self.walls)} walls")
         return wall % len(self.walls)

@@ -28,6 +28,7 @@ counted as 0/1, parsed or unmasked; any byte order and memory layout is converte
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -93,6 +94,18 @@ class ParameterRule:
             terms.append(f"({ref} != 0.0)")
         return " & ".join(terms)
 
+    def holds_value(self, x: float) -> bool:
+        """Whether one finite value satisfies the range (plain float comparisons)."""
+        if self.lower is not None and not (
+            x >= self.lower if self.closed_lower else x > self.lower
+        ):
+            return False
+        if self.upper is not None and not (
+            x <= self.upper if self.closed_upper else x < self.upper
+        ):
+            return False
+        return not (self.nonzero and x == 0.0)
+
     def holds(self, values: np.ndarray) -> np.ndarray:
         """Elementwise: whether the finite ``values`` satisfy the range."""
         ok = np.ones(values.shape, dtype=bool)
@@ -155,6 +168,16 @@ def check_parameters(
     """Check the parameter array ``p`` (shape (k,) or (..., k)) against ``rules`` once:
     a non-finite value raises :class:`CodegenError`, a value outside its range ``error``
     (``NumericalError``), each naming the parameter, its value and the rule."""
+    if p.ndim == 1:  # one parameter vector: plain floats, no array operations
+        values = p.tolist()
+        for rule in rules:
+            x = values[rule.index]
+            if not math.isfinite(x):
+                raise CodegenError(f"{where}: parameter {rule.name!r} = {x!r} is not finite")
+            if not rule.holds_value(x):
+                why = f" ({rule.why})" if rule.why else ""
+                raise error(f"{where}: parameter {rule.name!r} = {x!r} breaks {rule.text}{why}")
+        return
     for rule in rules:
         column = p[..., rule.index]
         finite = np.isfinite(column)
@@ -171,6 +194,7 @@ def check_parameters(
 
 
 _REFUSED_SCALARS = (bool, np.bool_, str, bytes, complex, np.complexfloating)
+_PLAIN = (float, int)  # exact types: bool is not among them
 
 
 def real_array(value: object, what: str) -> np.ndarray:
@@ -179,6 +203,14 @@ def real_array(value: object, what: str) -> np.ndarray:
     converted (integers, float16/32, long double, big-endian), while complex, boolean,
     string, bytes, datetime and masked values are refused, as is anything NumPy cannot
     turn into a regular array of numbers."""
+    kind = type(value)
+    if kind is np.ndarray and value.dtype == np.float64 and value.dtype.isnative:  # type: ignore[union-attr]
+        return value  # type: ignore[return-value]
+    if (kind is list or kind is tuple) and all(type(x) in _PLAIN for x in value):  # type: ignore[union-attr]
+        try:
+            return np.array(value, dtype=np.float64)  # a flat list of Python floats and ints
+        except OverflowError:
+            raise CodegenError(f"{what}: an integer beyond the float64 range") from None
     if isinstance(value, np.ma.MaskedArray) and np.ma.is_masked(value):
         raise CodegenError(f"{what}: masked values (a masked array with a mask set)")
     if isinstance(value, _REFUSED_SCALARS):

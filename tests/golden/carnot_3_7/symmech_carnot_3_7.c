@@ -4,6 +4,8 @@
  * Scene carnot_3_7; see symmech_carnot_3_7.h for the arguments and status codes.
  */
 #include <math.h>
+#include <stdint.h>
+#include <string.h>
 #include "symmech_carnot_3_7.h"
 
 /* SYMMECH_NONFINITE unless every entry of x[0:size] is finite. */
@@ -13,6 +15,15 @@ static int sm_check_finite(int size, const double *x)
         if (!isfinite(x[i])) return SYMMECH_NONFINITE;
     }
     return SYMMECH_OK;
+}
+
+/* 2^k for -1022 <= k <= 1023, exactly (from its bits: cheaper than ldexp). */
+static double sm_pow2(int k)
+{
+    const uint64_t bits = (uint64_t)(k + 1023) << 52;
+    double x;
+    memcpy(&x, &bits, sizeof x);
+    return x;
 }
 
 /*
@@ -266,16 +277,21 @@ int symmech_carnot_3_7_impact_rough_wall(const double *q, const double *v, const
         const double a = fabs(v[i]);
         if (a > scale) scale = a;
     }
-    if (!(scale > 0.0 && isfinite(scale))) {
-        return sm_unscaled_impact_rough_wall(q, v, p, out);
-    }
-    int e;
-    (void)frexp(scale, &e);
+    /* scale = f 2^e, 0.5 <= f < 1, -1073 <= e <= 1024: e from the exponent bits, or
+       frexp for a subnormal scale; 2^-e and 2^e as two normal factors each
+       (|e/2| <= 537), so every product is exact.  A zero, infinite or NaN scale: e = 0. */
+    uint64_t bits;
+    memcpy(&bits, &scale, sizeof bits);
+    int e = (int)(bits >> 52) - 1022;
+    if ((bits >> 52) == 0) (void)frexp(scale, &e);
+    if (!(scale > 0.0 && isfinite(scale))) e = 0;
+    const double d1 = sm_pow2(-e / 2), d2 = sm_pow2(-e - -e / 2);
+    const double u1 = sm_pow2(e / 2), u2 = sm_pow2(e - e / 2);
     double w[3];
-    for (int i = 0; i < 3; ++i) w[i] = ldexp(v[i], -e);
+    for (int i = 0; i < 3; ++i) w[i] = (v[i] * d1) * d2;
     const int status = sm_unscaled_impact_rough_wall(q, w, p, out);
     if (status != SYMMECH_OK) return status;
-    for (int i = 0; i < 3; ++i) out[i] = ldexp(out[i], e);
+    for (int i = 0; i < 3; ++i) out[i] = (out[i] * u1) * u2;
     return sm_check_finite(3, out);
 }
 

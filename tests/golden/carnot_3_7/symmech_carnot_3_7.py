@@ -252,7 +252,10 @@ def impact_rough_wall(q, v, p):
     speeds.
     """
     v = numpy.asarray(v, dtype=numpy.float64)
-    scale = numpy.max(numpy.abs(v), axis=-1, keepdims=True)
+    scale = numpy.abs(v[..., 0])
+    scale = numpy.maximum(scale, numpy.abs(v[..., 1]))
+    scale = numpy.maximum(scale, numpy.abs(v[..., 2]))
+    scale = scale[..., None]
     e = numpy.frexp(numpy.where((scale > 0.0) & numpy.isfinite(scale), scale, 1.0))[1]
     out = _unscaled_impact_rough_wall(q, numpy.ldexp(v, -e), p)
     return numpy.ldexp(out, e)

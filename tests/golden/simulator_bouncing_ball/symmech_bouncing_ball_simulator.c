@@ -1055,6 +1055,9 @@ static int run(sim_t *s)
             return 0;
         }
         record(s);
+        /* restart no longer than the step just cut (RKFlow.limit_step): the next event
+           is then located on a step of the motion's own scale */
+        if (s->have_h && te > s->st0 && s->h > te - s->st0) s->h = te - s->st0;
         if (flow_start(s)) return 0;
     }
     s->d[0] = s->t_end;
