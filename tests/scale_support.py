@@ -8,9 +8,11 @@ Large or adversarial inputs, built by hand, each small to declare:
   moments I1, I2, I3) rolling on a plane, in the quasi-velocities (v_x, v_y, omega) with
   Euler angles, hitting the wall x = 0 and rolling on it at impact;
 * scene-file texts: :data:`DIAGONAL_200` (200 coordinates, identity metric, one wall
-  ``q0 + 1``), :data:`POWER_64` (the potential ``(sin(x) + cos(y) + x*y*z + 1)**64``),
-  :data:`DENSE_TRIG_3` (a dense trigonometric 3 x 3 metric, the inertia tensor
-  ``R diag(1, 2, 3) R^T`` of a rotated body, with a wall).
+  ``q0 + 1``), :data:`WALLS_100` (100 coordinates, a wall on each), :data:`WALL_POWER_64`
+  (the gap ``(x + y + z + 1)**64 - 2``), :data:`POWER_64` (the potential
+  ``(sin(x) + cos(y) + x*y*z + 1)**64``), :data:`DENSE_TRIG_3` (a dense trigonometric
+  3 x 3 metric, the inertia tensor ``R diag(1, 2, 3) R^T`` of a rotated body plus
+  ``u u^T``, u trigonometric, with a curved wall).
 """
 
 from __future__ import annotations
@@ -95,6 +97,25 @@ def _diagonal_text(n: int) -> str:
 
 #: 200 coordinates, identity metric, one wall q0 + 1 >= 0 (a 2.5 KB scene file).
 DIAGONAL_200 = _diagonal_text(200)
+
+
+def _walls_text(n: int) -> str:
+    names = ", ".join(f'"q{i}"' for i in range(n))
+    ones = ", ".join('"1"' for _ in range(n))
+    walls = "".join(f'[[walls]]\npsi = "q{i} + 1"\n' for i in range(n))
+    return f"coordinates = [{names}]\nmetric = [{ones}]\n{walls}"
+
+
+#: 100 coordinates, identity metric, a wall q_i + 1 >= 0 on every coordinate (3.8 KB).
+WALLS_100 = _walls_text(100)
+
+#: A wall whose gap is a 64th power (its closed-form impact map is refused at once).
+WALL_POWER_64 = (
+    'coordinates = ["x", "y", "z"]\n'
+    'metric = ["1", "1", "1"]\n'
+    "[[walls]]\n"
+    'psi = "(x + y + z + 1)**64 - 2"\n'
+)
 
 #: A 3-coordinate scene whose potential is a 64th power of a trigonometric polynomial.
 POWER_64 = (

@@ -22,7 +22,14 @@ import mpmath as mp
 import numpy as np
 import pytest
 import sympy as sp
-from scale_support import DENSE_TRIG_3, DIAGONAL_200, POWER_64, cart_with_tip_wall
+from scale_support import (
+    DENSE_TRIG_3,
+    DIAGONAL_200,
+    POWER_64,
+    WALL_POWER_64,
+    WALLS_100,
+    cart_with_tip_wall,
+)
 from test_impacts_support import kkt_at
 
 import symmech as sm
@@ -41,7 +48,7 @@ def _timed(build):
 
 
 def test_scene_files_are_small():
-    for text in (DIAGONAL_200, POWER_64, DENSE_TRIG_3):
+    for text in (DIAGONAL_200, WALLS_100, WALL_POWER_64, POWER_64, DENSE_TRIG_3):
         assert len(text.encode()) < 10_000
 
 
@@ -63,6 +70,35 @@ def test_diagonal_metric_with_200_coordinates_derives_and_generates_in_seconds()
     expected[0] = -v[0]
     np.testing.assert_allclose(mod.impact(q, v), expected, rtol=0, atol=1e-15)
     np.testing.assert_allclose(mod.acceleration(q, v), np.zeros(200), atol=0)
+
+
+def test_wall_with_a_64th_power_gap_falls_back_at_once():
+    scene = sm.loads_scene(WALL_POWER_64).scene
+    code, elapsed = _timed(lambda: codegen.generate(scene, "numpy"))
+    assert elapsed < GUARD, f"{elapsed:.1f} s"
+    assert code.plan.strategy == "linear_solve"
+    assert "closed-form impact map of wall" in code.plan.fallback
+    mod = code.load()
+    q_num = [sp.Rational(1, 10), sp.Rational(-1, 20), sp.Rational(1, 40)]
+    point = dict(zip(scene.coordinates, q_num, strict=True))
+    v_minus = [sp.Rational(-1, 2), sp.Rational(1, 3), sp.Rational(-1, 4)]
+    expected = [float(e) for e in kkt_at(scene, 0, point, v_minus)]
+    got = mod.impact([float(e) for e in q_num], [float(e) for e in v_minus])
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.slow
+def test_a_wall_on_each_of_100_coordinates():
+    """3.8 KB: 100 impact functions of a 100 x 100 metric (about 20 s here)."""
+    code, elapsed = _timed(lambda: codegen.generate(sm.loads_scene(WALLS_100).scene, "numpy"))
+    assert elapsed < GUARD, f"{elapsed:.1f} s"
+    mod = code.load()
+    rng = np.random.default_rng(100)
+    q, v = rng.normal(size=100), -np.abs(rng.normal(size=100))
+    for wall in (0, 57, 99):
+        expected = v.copy()
+        expected[wall] = -v[wall]
+        np.testing.assert_allclose(mod.impact(q, v, wall=wall), expected, rtol=0, atol=1e-15)
 
 
 def test_power_64_potential_is_generated_by_linear_solve_at_once():

@@ -420,6 +420,16 @@ def _build(
         prepared[e] = out
         return out
 
+    ready: dict[int, tuple[Block, Block]] = {}
+
+    def prepare_block(b: Block) -> Block:
+        """``b`` with every entry prepared; a block shared by several functions (the
+        metric of every solve) is prepared once."""
+        hit = ready.get(id(b))
+        if hit is None or hit[0] is not b:
+            hit = ready[id(b)] = (b, Block(b.name, b.shape, tuple(prepare(e) for e in b.entries)))
+        return hit[1]
+
     def add(
         name: str,
         kind: str,
@@ -434,7 +444,7 @@ def _build(
         wall: str | None = None,
         wall_index: int | None = None,
     ) -> None:
-        blocks = [Block(b.name, b.shape, tuple(prepare(e) for e in b.entries)) for b in blocks]
+        blocks = [prepare_block(b) for b in blocks]
         syms: set = set().union(*[e.free_symbols for b in blocks for e in b.entries])
         slot_syms = set(inputs.slots.values())
         uses_t, uses_u, uses_p = TIME in syms, bool(syms & slot_syms), bool(syms & set(runtime))
@@ -473,11 +483,12 @@ def _build(
     diag = int(all(M[i, j] == 0 for i in range(n) for j in range(n) if i != j))
     mu = sp.Matrix(scene.constraint_matrix)
     closed = strategy == "closed_form"
+    M_block = _matrix_block("M", M)  # one block for every solve (n^2 entries, built once)
 
     def constrained_blocks() -> list[Block]:
         """g, f, the constraint one-forms and mu_dot v: the constrained system's inputs."""
         return [
-            _matrix_block("M", M),
+            M_block,
             _vector_block("f", f),
             _matrix_block("mu", mu),
             _vector_block("rate", scene.constraint_rate()),
@@ -537,7 +548,7 @@ def _build(
                 "acceleration v_dot, g v_dot = f solved in the code (Cholesky)",
                 "g v_dot = f (Carnot paper eq. 2)",
                 ("q", "v"),
-                [_matrix_block("M", M), _vector_block("f", f)],
+                [M_block, _vector_block("f", f)],
                 (n,),
                 step="spd_solve",
                 step_args=(n, diag),
@@ -707,7 +718,7 @@ def _build(
                     " (Carnot paper eqs. 6, 15, 20)",
                     ("q", "v"),
                     [
-                        _matrix_block("M", M),
+                        M_block,
                         _matrix_block("A", A),
                         Block("s", (2,), (sp.sympify(w.restitution), psi_t)),
                     ],
