@@ -34,7 +34,8 @@ coordinates:
 
 Everything is evaluated in float64 tree walks (:mod:`symmech.declaration.numeric`) and
 interval arithmetic; nothing calls ``sympy.simplify``.  The search is bounded by
-:data:`SEARCH_EVALUATIONS` evaluations per sampled point.
+:data:`SEARCH_EVALUATIONS` evaluations per sampled point and :data:`SEARCH_WORK` tree nodes
+evaluated per metric.
 """
 
 from __future__ import annotations
@@ -63,9 +64,14 @@ __all__ = ["SEARCH_EVALUATIONS", "Verdict", "definiteness", "lower_bound"]
 
 #: Evaluations of the objective allowed to the compass search from one sampled point.
 SEARCH_EVALUATIONS = 120
+#: Work of all the searches of one metric, in tree nodes evaluated: a large metric gets
+#: fewer evaluations (``SEARCH_WORK // nodes`` in all), so the search costs at most about
+#: a second whatever its size.
+SEARCH_WORK = 100_000
 #: Leading principal minors are formed symbolically (Berkowitz, no simplification) up to
-#: this size of metric.
+#: this size of metric, and when the metric has at most MINORS_MAX_NODES distinct nodes.
 MINORS_MAX_N = 3
+MINORS_MAX_NODES = 120
 #: Polynomials up to this degree have their real roots isolated exactly.
 ROOTS_MAX_DEGREE = 12
 
@@ -235,14 +241,17 @@ def _exact_sign(entry: sp.Expr, coordinate: sp.Symbol) -> tuple[str, sp.Rational
 
 
 def _compass(
-    objective: Callable[[dict], float], start: dict, variables: Sequence[sp.Symbol]
+    objective: Callable[[dict], float],
+    start: dict,
+    variables: Sequence[sp.Symbol],
+    budget: int = SEARCH_EVALUATIONS,
 ) -> tuple[float, dict]:
     """Minimise ``objective`` from ``start`` by compass search (step halving), stopping at
-    a negative value or after :data:`SEARCH_EVALUATIONS` evaluations."""
+    a negative value or after ``budget`` evaluations."""
     x = dict(start)
     f = objective(x)
     step, evaluations = 0.5, 1
-    while evaluations < SEARCH_EVALUATIONS and step > 1e-6 and f >= 0:
+    while evaluations < budget and step > 1e-6 and f >= 0:
         moved = False
         for v in variables:
             for sign in (1.0, -1.0):
@@ -252,7 +261,7 @@ def _compass(
                 if fy < f:
                     x, f, moved = y, fy, True
                     break
-            if f < 0 or evaluations >= SEARCH_EVALUATIONS:
+            if f < 0 or evaluations >= budget:
                 break
         step = step * 2 if moved and step < 4 else step / 2 if not moved else step
     return f, x
@@ -341,18 +350,20 @@ def definiteness(
     if not q:
         return Verdict("proven", "the metric does not depend on the coordinates")
     diagonal = all(G[i, j] == 0 for i in range(n) for j in range(n) if i != j)
-    minors = (
-        [G[:k, :k].det(method="berkowitz") for k in range(1, n + 1)]
-        if not diagonal and n <= MINORS_MAX_N
-        else []
-    )
+    nodes = _nodes(G)
+    budget = max(10, min(SEARCH_EVALUATIONS, SEARCH_WORK // (nodes * max(1, len(points)))))
+    minors: list[sp.Expr] = []
     undecided: list[str] = []
     for sample in points:
         fixed = {k: v for k, v in sample.items() if k not in q}
         if diagonal:
-            verdict = _diagonal(G, q, sample, fixed, undecided)
+            verdict = _diagonal(G, q, sample, fixed, undecided, budget)
         else:
-            verdict = _full(G, q, minors, sample, fixed, undecided)
+            if _interval_cholesky(G, fixed):
+                continue
+            if not minors and n <= MINORS_MAX_N and nodes <= MINORS_MAX_NODES:
+                minors = [G[:k, :k].det(method="berkowitz") for k in range(1, n + 1)]
+            verdict = _full(G, q, minors, sample, fixed, undecided, budget)
         if verdict is not None:
             return verdict
     if undecided:
@@ -361,7 +372,12 @@ def definiteness(
 
 
 def _diagonal(
-    G: sp.MatrixBase, q: Sequence[sp.Symbol], sample: Mapping, fixed: Mapping, undecided: list
+    G: sp.MatrixBase,
+    q: Sequence[sp.Symbol],
+    sample: Mapping,
+    fixed: Mapping,
+    undecided: list,
+    budget: int,
 ) -> Verdict | None:
     for i in range(G.rows):
         e = G[i, i]
@@ -381,7 +397,7 @@ def _diagonal(
                 A, _ = real_values(G, point)
                 return Verdict("refuted", classify_symmetric(A)[1], point)
         mine = [c for c in q if c in e.free_symbols]
-        value, where = _compass(_entry(e), _float_point(sample), mine)
+        value, where = _compass(_entry(e), _float_point(sample), mine, budget)
         if value < 0:
             confirmed = _confirm(G, where, sample, q)
             if confirmed is not None:
@@ -400,6 +416,7 @@ def _full(
     sample: Mapping,
     fixed: Mapping,
     undecided: list,
+    budget: int,
 ) -> Verdict | None:
     n = G.rows
     if minors:
@@ -407,9 +424,7 @@ def _full(
         if all(b is not None for b in bounds) and all(b > 0 for b in bounds[:-1]):
             if bounds[-1] >= 0:
                 return None
-    if _interval_cholesky(G, fixed):
-        return None
-    value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q)
+    value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q, budget)
     if value < 0:
         confirmed = _confirm(G, where, sample, q)
         if confirmed is not None:
@@ -436,6 +451,14 @@ def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
             A = [[_interval(G[i, j], fixed, memo) for j in range(n)] for i in range(n)]
             if any(a is None for row in A for a in row):
                 return False
+            # g is symmetric (checked before): g_ij and g_ji enclose the same values
+            for i in range(n):
+                for j in range(i + 1, n):
+                    lo = max(_lo(A[i][j]), _lo(A[j][i]))
+                    hi = min(_hi(A[i][j]), _hi(A[j][i]))
+                    if lo > hi:
+                        return False
+                    A[i][j] = A[j][i] = _IV.mpf([lo, hi])
             for k in range(n):
                 pivot = A[k][k]
                 if not (_lo(pivot) > 0 or (k == n - 1 and _lo(pivot) >= 0)):
@@ -448,6 +471,18 @@ def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
             return True
     except (ArithmeticError, ValueError, TypeError, RecursionError):
         return False
+
+
+def _nodes(G: sp.MatrixBase) -> int:
+    """The number of distinct subtrees of the entries of ``G`` (what one evaluation walks)."""
+    seen: set[sp.Basic] = set()
+    stack = list(G)
+    while stack:
+        e = stack.pop()
+        if e not in seen:
+            seen.add(e)
+            stack.extend(e.args)
+    return max(1, len(seen))
 
 
 def _short(expr: object, limit: int = 50) -> str:
