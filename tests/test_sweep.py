@@ -49,7 +49,10 @@ def test_rows_equal_their_own_simulate_runs_bit_for_bit(ellipse):
     grid = _ellipse_grid()
     base = {k: v for k, v in params.items() if k != "alpha"}
     for contact in ("persistent", "stop"):
-        tab = sm.sweep(scene, grid, 2.0, params=base, q0=c.q0, v0=c.v0, contact=contact, threads=2)
+        tab = sm.sweep(
+            scene, grid, 2.0, params=base, q0=c.q0, v0=c.v0, contact=contact, threads=2,
+            outputs=("energy", "gap"),
+        )  # fmt: skip
         assert list(tab.index) == list(range(9))
         for i, row in tab.iterrows():
             p = {**base, "alpha": grid["alpha"][i]}
@@ -74,6 +77,9 @@ def test_rows_equal_their_own_simulate_runs_bit_for_bit(ellipse):
             by_hand = 0.5 * m * (final_v[0] ** 2 + final_v[1] ** 2)
             by_hand += 0.5 * inertia * final_v[2] ** 2 + m * g * row["y_final"]
             assert row["energy"] == pytest.approx(by_hand, rel=1e-13, abs=1e-13)
+            th, a, b = row["theta_final"], p["a"], p["b"]
+            gap = row["y_final"] - math.hypot(a * math.sin(th), b * math.cos(th))
+            assert row["gap"] == pytest.approx(gap, abs=1e-14)
     # contact="stop": at alpha = 0.3 the ellipse comes to rest before t = 2, elastic never
     assert (tab["status"][tab["alpha"] == 0.3] == "zeno").all()
     assert (tab["status"][tab["alpha"] == 1.0] == "finished").all()
@@ -111,13 +117,14 @@ def test_ball_columns_against_the_closed_form():
     alpha = np.array([0.2, 0.5, 0.7])
     tab = sm.sweep(
         bouncing_ball(), {"y0": h, "alpha": alpha}, 20.0, v0=[0.0],
-        params={"m": 2.0, "g": 9.81}, contact="stop", outputs=("energy", "rhs_calls"),
+        params={"m": 2.0, "g": 9.81}, contact="stop", outputs=("energy", "gap", "rhs_calls"),
     )  # fmt: skip
     t_star = np.sqrt(2 * h / 9.81) * (1 + alpha) / (1 - alpha)
     assert np.allclose(tab["time_to_rest"], t_star, rtol=1e-7)
     assert (tab["status"] == "zeno").all() and (tab["n_impact"] > 5).all()
     assert np.allclose(tab["energy"], 2.0 * 9.81 * tab["y_final"] + tab["ydot_final"] ** 2)
     assert (tab["rhs_calls"] > 0).all()
+    assert tab["gap"].tolist() == tab["y_final"].tolist()  # the floor's gap is y
 
 
 def test_failures_are_rows(quartic):

@@ -49,9 +49,10 @@ from symmech.sweep.worker import LibrarySource, LoopOptions
 
 __all__ = ["OUTPUTS", "sweep"]
 
-#: The outputs ``sweep`` can add: the energy T + V at the final state, and the C loop's
-#: statistics of each run (``energy_drift`` NaN where the flow does not conserve energy).
-OUTPUTS = ("energy", *INFO_OUTPUTS)
+#: The outputs ``sweep`` can add: the energy T + V and the smallest wall gap psi at the
+#: final state (below zero: the run ended inside a wall), and the C loop's statistics of
+#: each run (``energy_drift`` NaN where the flow does not conserve energy).
+OUTPUTS = ("energy", "gap", *INFO_OUTPUTS)
 
 #: Largest default chunk (runs per C call sequence / Dask task).
 MAX_CHUNK = 10_000

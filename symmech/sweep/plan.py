@@ -242,20 +242,12 @@ def _outputs_at(
     """The chosen outputs at the final states of the runs at positions ``sent``."""
     r = prep.hi - prep.lo
     out: dict[str, np.ndarray] = {}
-    free = plan.system.free
     for name in plan.outputs:
         col = np.full(r, np.nan)
-        if name == "energy":
+        if name in ("energy", "gap"):
             for g, idx in _groups(sent, prep.group):
                 p = _pvector(plan, prep.values[g])
-                try:
-                    col[idx] = np.asarray(free.energy(q[idx], v[idx], p, t=t[idx])).reshape(-1)
-                except NumericalError:
-                    for i in idx:
-                        try:
-                            col[i] = float(free.energy(q[i], v[i], p, t=float(t[i])))
-                        except NumericalError:
-                            col[i] = np.nan
+                col[idx] = _evaluate(plan, name, p, t[idx], q[idx], v[idx])
         out[name] = col
     for name, fn in plan.expressions.items():
         col = np.full(r, np.nan)
@@ -267,6 +259,34 @@ def _outputs_at(
                 col[sent] = np.broadcast_to(np.asarray(fn(*args), dtype=float), sent.shape)
         out[name] = col
     return out
+
+
+def _evaluate(
+    plan: Plan, name: str, p: np.ndarray | None, t: np.ndarray, q: np.ndarray, v: np.ndarray
+) -> np.ndarray:
+    """``energy`` (T + V) or ``gap`` (the smallest psi over the walls, +inf without walls)
+    at the states (t, q, v) with one parameter vector; NaN where the generated function
+    reports a non-finite value."""
+    free = plan.system.free
+
+    def one(tt: Any, qq: np.ndarray, vv: np.ndarray) -> np.ndarray:
+        if name == "energy":
+            return np.asarray(free.energy(qq, vv, p, t=tt), dtype=float)
+        out = np.full(np.shape(tt), np.inf)
+        for w in range(len(plan.scene.walls)):
+            out = np.minimum(out, np.asarray(free.psi(qq, p, wall=w, t=tt), dtype=float))
+        return out
+
+    try:
+        return one(t, q, v).reshape(-1)
+    except NumericalError:
+        col = np.full(len(t), np.nan)
+        for i in range(len(t)):
+            try:
+                col[i] = float(one(float(t[i]), q[i], v[i]))
+            except NumericalError:
+                col[i] = np.nan
+        return col
 
 
 def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | None) -> dict:
