@@ -224,8 +224,16 @@ def test_stable_coefficient_structural_shortcut_agrees_with_the_full_step():
         assert sp.expand(fast - e) == 0
         full = sp.factor(sp.cancel(e))
         assert sp.expand(fast - full) == 0
-    # the difference of squares is still factored (no cancellation when a ~ b)
+    # the difference of squares is still factored (no cancellation when a ~ b), also as
+    # the coefficient of a state monomial; a sum of positive terms is kept as it is
     assert stable_coefficient(a**2 - b**2) == (a - b) * (a + b)
+    s = sp.sin(x) ** 2
+    assert stable_coefficient(a**2 * s - b**2 * s + sp.cos(x), (x,)) == (a - b) * (
+        a + b
+    ) * s + sp.cos(x)
+    m, k = sp.symbols("m k", positive=True)
+    positive = m**2 * s + m * k * s + sp.cos(x)
+    assert stable_coefficient(positive, (x,)) == positive
     assert stable_coefficient(1 - a / (a + b)) == b / (a + b)
     # over the expansion budget: returned as given, at once
     big = (sp.sin(x) + sp.cos(y) + x * y * z + 1) ** 63 * (sp.cos(x) + y * z)
