@@ -20,8 +20,9 @@ coordinates:
      ``det g`` >= 0 (Sylvester's criterion, with the limit case det g = 0); for any n, the
      pivots of an LDL^T factorisation in interval arithmetic have lower bounds > 0 (the
      last >= 0);
-   * exact real roots (:func:`sympy.real_roots`) of a diagonal entry that is a polynomial
-     in one coordinate: it is nonnegative iff it is between and beyond its roots;
+   * exact real roots (:func:`sympy.real_roots`) of a diagonal entry or leading minor that
+     is a polynomial in one coordinate: it is nonnegative iff it is between and beyond its
+     roots;
 
 2. **refuted**: a point where g is indefinite, found by the exact roots above or by a
    compass search from each sampled point, minimising a diagonal entry or the smallest
@@ -419,11 +420,11 @@ def _full(
     budget: int,
 ) -> Verdict | None:
     n = G.rows
-    if minors:
-        bounds = [lower_bound(m, fixed) for m in minors]
-        if all(b is not None for b in bounds) and all(b > 0 for b in bounds[:-1]):
-            if bounds[-1] >= 0:
-                return None
+    if minors and all(
+        _minor_sign(m, fixed, q) in (("pos", "nonneg") if k == n - 1 else ("pos",))
+        for k, m in enumerate(minors)
+    ):
+        return None
     value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q, budget)
     if value < 0:
         confirmed = _confirm(G, where, sample, q)
@@ -471,6 +472,27 @@ def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
             return True
     except (ArithmeticError, ValueError, TypeError, RecursionError):
         return False
+
+
+def _minor_sign(minor: sp.Expr, fixed: Mapping, q: Sequence[sp.Symbol]) -> str | None:
+    """ "pos" or "nonneg" when proven over the coordinates (interval bound, or the exact
+    roots of a polynomial in one coordinate), for the parameters at ``fixed``."""
+    bound = lower_bound(minor, fixed)
+    if bound is not None and bound >= 0:
+        return "pos" if bound > 0 else "nonneg"
+    at_sample = minor.xreplace(dict(fixed))
+    own = [c for c in q if c in at_sample.free_symbols]
+    if len(own) != 1 or at_sample.free_symbols - set(own):
+        return None
+    exact = _exact_sign(at_sample, own[0])
+    if exact is None or exact[0] != "nonneg":
+        return None
+    # nonnegative; positive unless it has a real root
+    try:
+        roots = sp.Poly(at_sample, own[0]).count_roots()
+    except sp.PolynomialError:
+        return "nonneg"
+    return "pos" if roots == 0 else "nonneg"
 
 
 def _nodes(G: sp.MatrixBase) -> int:
