@@ -468,3 +468,17 @@ def test_a_metric_check_is_left_out_where_nothing_is_evaluated():
     assert not spec["acceleration"].metric_check and not spec["acceleration"].takes_parameters
     impact = next(f for f in code.functions if f.kind == "impact")
     assert impact.metric_check and impact.takes_parameters
+
+
+@pytest.mark.parametrize("target", ["c", "numpy"])
+def test_a_scene_without_parameters_accepts_none_or_empty_and_refuses_values(target):
+    if target == "c":
+        require_c_compiler()
+    x, y = sm.coordinates("x y")
+    scene = sm.Scene((x, y), metric=sp.eye(2), walls=[sm.Wall(y, name="floor")], name="bare")
+    mod = sm.codegen.generate(scene, target).load()
+    for empty in (None, [], (), {}, np.zeros(0)):
+        np.testing.assert_array_equal(mod.impact([0.0, 0.0], [1.0, -2.0], empty), [1.0, 2.0])
+    for given in ([1.0], {"m": 1.0}, np.ones(2)):
+        with pytest.raises(CodegenError, match="no run-time parameters"):
+            mod.impact([0.0, 0.0], [1.0, -2.0], given)
