@@ -24,6 +24,21 @@ this wrapper gives every function the same signature.  A wall is given by its in
 its name (``wall="left wall"``; the generated names use the sanitised ``left_wall``).  A
 failure at some state (a matrix that must be positive definite is not, or an output is
 not finite) raises :class:`NumericalError`.
+
+Every argument is converted to float64 (any byte order, layout or real number type) or
+refused with a :class:`~symmech.codegen.plan.CodegenError` naming it (complex, boolean,
+string, masked, ragged, shapes that do not broadcast); a batch of N = 0 states gives an
+empty result.  The parameters are checked once per call against the ranges their
+declaration gives (:mod:`symmech.codegen.runtime_checks`: a sign, a restitution in
+[0, 1]): a value outside raises :class:`NumericalError` naming the parameter, a
+non-finite one a ``CodegenError``:
+
+>>> try:
+...     mod.impact([0.0, 1.0, 0.0], [1.0, -2.0, 0.0], {"R": 1, "alpha": 5, "k": 1, "m": 2})
+... except sm.codegen.NumericalError as exc:
+...     print(exc)  # doctest: +NORMALIZE_WHITESPACE
+params: parameter 'alpha' = 5.0 breaks 0 <= alpha <= 1
+(declared nonnegative; the restitution of wall 'rough_wall')
 """
 
 from __future__ import annotations
