@@ -33,6 +33,10 @@ from symmech.sweep.worker import ChunkInput, LibrarySource, LoopOptions
 
 __all__ = ["FIXED_COLUMNS", "INFO_OUTPUTS", "Plan", "Prepared", "finish", "prepare"]
 
+#: The info row's status and reason of a run that reached t_end (the template's
+#: ST_FINISHED and R_END, decoded by :func:`symmech.simulate.csim.decode`).
+_FINISHED, _REACHED_END = 1, 1
+
 #: Outputs read from the C loop's statistics (entry of the info row).
 INFO_OUTPUTS = {
     "rejected_steps": 12,
@@ -155,7 +159,7 @@ def _psi_checks(
     for g, idx in _groups(rows, group):
         p = _pvector(plan, values[g])
         for w, wall in enumerate(plan.scene.walls):
-            live = np.array([i for i in idx if int(i) not in out], dtype=np.int64)
+            live = idx[[int(i) not in out for i in idx]] if out else idx
             if live.size == 0:
                 break
             try:
@@ -168,13 +172,19 @@ def _psi_checks(
                         psi[k] = float(free.psi(Q[i], p, wall=w, t=t0))
                     except NumericalError as exc:
                         out[int(i)] = str(exc)
-            for k, i in enumerate(live):
-                if int(i) not in out and psi[k] < -10 * plan.options.atol:
-                    out[int(i)] = (
-                        f"q0 is on the wrong side of wall {wall.name!r}:"
-                        f" psi = {float(psi[k])!r} < 0"
-                    )
+            for k in np.flatnonzero(psi < -10 * plan.options.atol):
+                out.setdefault(
+                    int(live[k]),
+                    f"q0 is on the wrong side of wall {wall.name!r}: psi = {float(psi[k])!r} < 0",
+                )
     return out
+
+
+def _without(rows: np.ndarray, messages: dict[int, str]) -> np.ndarray:
+    """``rows`` less those with a message."""
+    if not messages:
+        return rows
+    return rows[~np.isin(rows, np.fromiter(messages, dtype=np.int64))]
 
 
 def prepare(plan: Plan, index: int, lo: int, hi: int) -> Prepared:
@@ -182,32 +192,34 @@ def prepare(plan: Plan, index: int, lo: int, hi: int) -> Prepared:
     Q, V, PV = plan.states(lo, hi)
     r = hi - lo
     messages: dict[int, str] = {}
-    for i in range(r):
-        for what, a in (("q0", Q[i]), ("v0", V[i])):
-            if i not in messages and not np.all(np.isfinite(a)):
-                messages[i] = f"{what}: every entry must be finite, got {a.tolist()}"
+    for what, a in (("q0", Q), ("v0", V)):
+        for i in np.flatnonzero(~np.isfinite(a).all(axis=1)):
+            messages.setdefault(int(i), f"{what}: every entry must be finite, got {a[i].tolist()}")
     pnames = plan.names["p"]
-    rows = np.array([i for i in range(r) if i not in messages], dtype=np.int64)
+    rows = _without(np.arange(r, dtype=np.int64), messages)
     group = np.full(r, -1, dtype=np.int64)
     values: list[dict[str, float]] = []
     if rows.size:
-        unique, inverse = np.unique(PV[rows], axis=0, return_inverse=True)
-        inverse = inverse.reshape(-1)
-        ok_group: list[bool] = []
-        for u in unique:
+        varied = sorted({i for i in plan.columns.params if i >= 0})
+        if varied:
+            _, first, inverse = np.unique(
+                PV[rows][:, varied], axis=0, return_index=True, return_inverse=True
+            )
+            unique = PV[rows][first]
+            group[rows] = inverse.reshape(-1)
+        else:  # no column sets a parameter: one vector
+            unique = PV[rows][:1]
+            group[rows] = 0
+        for g, u in enumerate(unique):
             try:
                 values.append(check_parameters(plan.scene, dict(zip(pnames, u, strict=True))))
-                ok_group.append(True)
             except SimulationError as exc:
                 values.append({})
-                ok_group.append(False)
-                bad = str(exc)
-                for i in rows[inverse == len(ok_group) - 1]:
-                    messages[int(i)] = bad
-        group[rows] = inverse
-        rows = np.array([i for i in rows if ok_group[group[i]]], dtype=np.int64)
+                for i in rows[group[rows] == g]:
+                    messages[int(i)] = str(exc)
+        rows = _without(rows, messages)
     messages.update(_psi_checks(plan, Q, rows, group, values))
-    rows = np.array([i for i in rows if int(i) not in messages], dtype=np.int64)
+    rows = _without(rows, messages)
     if plan.scene.is_constrained and rows.size:
         fns: dict[int, Functions] = {}
         t0, opts = plan.loop.t0, plan.options
@@ -224,13 +236,11 @@ def prepare(plan: Plan, index: int, lo: int, hi: int) -> Prepared:
                 )
             else:
                 V[i] = fns[g].project(None, t0, Q[i], V[i])
-        rows = np.array([i for i in rows if int(i) not in messages], dtype=np.int64)
+        rows = _without(rows, messages)
     order = rows[np.argsort(group[rows], kind="stable")]
-    used = sorted(set(group[order].tolist()))
-    renumber = {g: k for k, g in enumerate(used)}
-    local = np.array([renumber[int(g)] for g in group[order]], dtype=np.int64)
-    starts = np.searchsorted(local, np.arange(len(used) + 1), side="left").astype(np.int64)
-    P = np.array([plan.parameters_of(values[g]) for g in used]) if used else np.zeros((0, 1))
+    used, local = np.unique(group[order], return_inverse=True)
+    starts = np.searchsorted(local.reshape(-1), np.arange(len(used) + 1)).astype(np.int64)
+    P = np.array([plan.parameters_of(values[g]) for g in used]) if used.size else np.zeros((0, 1))
     Y = np.ascontiguousarray(np.hstack([Q, V])[order])
     chunk = ChunkInput(index=index, Y=Y, P=P, starts=starts)
     return Prepared(index, lo, hi, chunk, order, group, values, messages)
@@ -312,9 +322,12 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
         sent = np.zeros(0, dtype=np.int64)
     else:
         walls = tuple(w.name for w in plan.scene.walls)
-        for k, i in enumerate(sent):
-            row = info[k]
-            st, msg, acc = decode(row, walls, plan.options.t_end)
+        # a run that reached t_end decodes to ("finished", "reached t_end = ...", None):
+        # only the others are decoded one by one
+        status[sent] = "finished"
+        for k in np.flatnonzero((info[:, 0] != _FINISHED) | (info[:, 1] != _REACHED_END)):
+            st, msg, acc = decode(info[k], walls, plan.options.t_end)
+            i = sent[k]
             status[i] = st
             message[i] = None if st == "finished" else msg
             rest[i] = np.nan if acc is None else acc

@@ -1,0 +1,186 @@
+"""Benchmark: ``sm.sweep`` on one thread, on every local core, and on a Dask LocalCluster.
+
+For the bouncing ball and the text 001 ellipse (their built-in cases, ``contact`` as the
+case runs: persistent), ``--runs`` runs over a grid of initial states (one parameter
+vector, so the baseline below runs the same thing) go through
+
+* **baseline**: ``sm.simulate_batch(..., threads=1)``: the bare C batch loop, one call,
+  no table, no per-run Python;
+* **sweep, 1 thread**: ``sm.sweep(..., threads=1)``;
+* **sweep, local**: ``sm.sweep(..., threads=<cores>)``;
+* **sweep, Dask**: ``sm.sweep(..., client=Client(LocalCluster(n_workers=<cores>,
+  processes=True, threads_per_worker=1)))`` with chunks of ``--dask-chunk`` runs
+  (default 10^4); the cluster is started and the library loaded on every worker (one small
+  sweep) before the clock starts.
+
+Printed per route: runs per second; seconds per run; the route's overhead per run over the
+baseline's CPU time per run (``(workers x T_route - T_baseline) / N``, as a fraction of
+the baseline's time per run); the parallel efficiency ``T_1 thread / (workers x
+T_route)``.  Targets (issue 15): local parallel efficiency >= 80% on 2 cores, Dask
+overhead < 10% of run time at chunks of 10^4 runs.  Memory: the resident set size of
+each Dask worker after a sweep of N runs and after one of ``--grow`` x N runs (flat if the
+results are streamed, not held).  ``--big N`` also runs an N-run ellipse sweep locally and
+on the cluster, reports both times and whether the tables are identical (bit for bit).
+
+Run from the repository root: ``python3 benchmarks/sweep.py`` (about 3 minutes on 2
+cores), ``python3 benchmarks/sweep.py --big 100000``.  Timings on a shared machine are
+indicative; nothing here is asserted by the tests.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import numpy as np
+
+import symmech as sm
+from symmech.bench.cases import case
+
+
+def _grid(name: str, runs: int) -> dict[str, np.ndarray]:
+    """Initial states around the case's: the ball's height, the ellipse's angle."""
+    if name == "bouncing_ball":
+        return {"y0": np.linspace(0.5, 2.0, runs)}
+    return {"theta0": np.linspace(0.0, np.pi, runs)}
+
+
+def _kwargs(name: str) -> dict:
+    c = case(name)
+    return {"params": c.params(), "q0": list(c.q0), "v0": list(c.v0)}
+
+
+def _states(name: str, grid: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    c = case(name)
+    N = len(next(iter(grid.values())))
+    Q = np.tile(np.array(c.q0, dtype=float), (N, 1))
+    V = np.tile(np.array(c.v0, dtype=float), (N, 1))
+    column = "y0" if name == "bouncing_ball" else "theta0"
+    Q[:, -1 if name == "bouncing_ball" else 2] = grid[column]
+    return Q, V
+
+
+def _timed(fn, *args, **kwargs):
+    start = time.perf_counter()
+    out = fn(*args, **kwargs)
+    return time.perf_counter() - start, out
+
+
+def _rss(client) -> list[float]:
+    import psutil
+
+    def rss() -> float:
+        return psutil.Process().memory_info().rss / 2**20
+
+    return sorted(client.run(rss).values())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--runs", type=int, default=20_000)
+    ap.add_argument("--dask-chunk", type=int, default=10_000)
+    ap.add_argument("--grow", type=int, default=4, help="memory check: N and grow x N runs")
+    ap.add_argument("--cases", default="bouncing_ball,ellipse_gravity")
+    ap.add_argument("--big", type=int, default=0, help="also an N-run ellipse sweep, both routes")
+    args = ap.parse_args()
+
+    from distributed import Client, LocalCluster
+
+    cores = os.cpu_count() or 1
+    cluster = LocalCluster(
+        n_workers=cores,
+        processes=True,
+        threads_per_worker=1,
+        host="127.0.0.1",
+        dashboard_address=None,
+    )
+    client = Client(cluster)
+    rows = []
+    memory = []
+    try:
+        for name in args.cases.split(","):
+            c = case(name)
+            scene = c.scene()
+            kw = _kwargs(name)
+            grid = _grid(name, args.runs)
+            Q, V = _states(name, grid)
+            small = {k: v[:50] for k, v in grid.items()}
+            sm.sweep(scene, small, c.t_end, client=client, **kw)  # load on every worker
+            sm.sweep(scene, small, c.t_end, threads=1, **kw)  # compile, warm up
+            t_base, _ = _timed(
+                sm.simulate_batch, scene, Q, V, c.t_end, params=kw["params"], threads=1
+            )
+            t_one, one = _timed(sm.sweep, scene, grid, c.t_end, threads=1, **kw)
+            t_loc, loc = _timed(sm.sweep, scene, grid, c.t_end, threads=cores, **kw)
+            t_dask, dsk = _timed(
+                sm.sweep, scene, grid, c.t_end, client=client, chunk=args.dask_chunk, **kw
+            )
+            same = one.equals(loc) and one.equals(dsk)
+            N = args.runs
+            per = t_base / N
+            for route, T, workers in (
+                ("baseline: simulate_batch, 1 thread", t_base, 1),
+                ("sweep, 1 thread", t_one, 1),
+                (f"sweep, local {cores} threads", t_loc, cores),
+                (f"sweep, Dask {cores} workers (chunk {args.dask_chunk})", t_dask, cores),
+            ):
+                overhead = (workers * T - t_base) / N
+                rows.append(
+                    (name, route, N / T, T / N * 1e6, overhead / per, t_one / (workers * T))
+                )
+            rows.append((name, f"tables identical across routes: {same}", 0, 0, 0, 0))
+            if name == "ellipse_gravity":
+                before = _rss(client)
+                grown = {k: np.linspace(v[0], v[-1], args.grow * N) for k, v in grid.items()}
+                sm.sweep(scene, grid, c.t_end, client=client, chunk=args.dask_chunk, **kw)
+                after_n = _rss(client)
+                t_grow, _ = _timed(
+                    sm.sweep, scene, grown, c.t_end, client=client, chunk=args.dask_chunk, **kw
+                )
+                after_grow = _rss(client)
+                memory = [before, after_n, after_grow, t_grow]
+        print(f"sweep benchmark: {args.runs} runs per case, {cores} cores")
+        print(
+            f"{'case':16} {'route':44} {'runs/s':>9} {'us/run':>9} {'overhead':>9}"
+            f" {'efficiency':>10}"
+        )
+        for name, route, rate, us, over, eff in rows:
+            if rate == 0:
+                print(f"{name:16} {route}")
+                continue
+            print(f"{name:16} {route:44} {rate:9.0f} {us:9.1f} {over:9.1%} {eff:10.1%}")
+        print(
+            "overhead: (workers x T - T_baseline) / N over the baseline's time per run;"
+            " efficiency: T_1 thread / (workers x T)"
+        )
+        if memory:
+            before, after_n, after_grow, t_grow = memory
+            print(
+                f"Dask worker RSS (MiB): before {before}, after {args.runs} runs {after_n},"
+                f" after {args.grow * args.runs} runs {after_grow} ({t_grow:.1f} s)"
+            )
+        if args.big:
+            c = case("ellipse_gravity")
+            scene = c.scene()
+            kw = _kwargs("ellipse_gravity")
+            grid = sm.sweep.product(
+                alpha=np.linspace(0.1, 0.9, args.big // 100), theta0=np.linspace(0, np.pi, 100)
+            )
+            kw["params"] = {k: v for k, v in kw["params"].items() if k != "alpha"}
+            t_l, loc = _timed(sm.sweep, scene, grid, c.t_end, progress=False, **kw)
+            t_d, dsk = _timed(
+                sm.sweep, scene, grid, c.t_end, client=client, chunk=args.dask_chunk, **kw
+            )
+            counts = loc["status"].value_counts().to_dict()
+            print(
+                f"{len(loc)}-run ellipse sweep (alpha x theta0): local {t_l:.1f} s,"
+                f" Dask LocalCluster {t_d:.1f} s, identical: {loc.equals(dsk)}; {counts}"
+            )
+    finally:
+        client.close()
+        cluster.close()
+
+
+if __name__ == "__main__":
+    main()
