@@ -183,25 +183,40 @@ def constant_out_of_range(expr: sp.Basic) -> OutOfRange | None:
     >>> constant_out_of_range(sp.exp(-700) * x + 1) is None
     True
     """
-    seen: set[sp.Basic] = set()
-    stack = [expr]
+    # one post-order walk: which subtrees are constant (no symbol, no undefined function)
+    constant: dict[sp.Basic, bool] = {}
+    stack: list[tuple[sp.Basic, bool]] = [(expr, False)]
     while stack:
-        e = stack.pop()
-        if e in seen or not isinstance(e, sp.Expr) or e.is_Symbol:
+        e, ready = stack.pop()
+        if e in constant:
+            continue
+        if not e.args:
+            constant[e] = not isinstance(e, sp.Symbol) and getattr(e, "is_number", False)
+            continue
+        if not ready:
+            stack.append((e, True))
+            stack.extend((a, False) for a in e.args if a not in constant)
+            continue
+        constant[e] = isinstance(e, sp.Expr) and all(constant[a] for a in e.args)
+    # then top-down: the maximal constant subtrees and the coefficients of products
+    seen: set[sp.Basic] = set()
+    todo = [expr]
+    while todo:
+        e = todo.pop()
+        if e in seen or not isinstance(e, sp.Expr):
             continue
         seen.add(e)
-        if not e.free_symbols:
+        if constant[e]:
             if e.is_number:
                 reason = range_problem(e)
                 if reason is not None:
                     return OutOfRange(e, e, reason)
             continue
         if e.is_Mul:
-            coefficient = [a for a in e.args if not a.free_symbols]
+            coefficient = [a for a in e.args if constant[a]]
             if len(coefficient) > 1:
-                merged = sp.Mul(*coefficient, evaluate=False)
-                reason = range_problem(merged)
+                reason = range_problem(sp.Mul(*coefficient, evaluate=False))
                 if reason is not None:
                     return OutOfRange(sp.Mul(*coefficient), e, reason)
-        stack.extend(e.args)
+        todo.extend(e.args)
     return None

@@ -41,6 +41,7 @@ __all__ = [
     "evaluate",
     "evaluate_matrix",
     "evaluate_matrix_mp",
+    "proven_real",
     "proven_sign",
     "rank_at",
     "real_values",
@@ -493,3 +494,13 @@ def _proven_real(e: sp.Expr) -> bool:
     if isinstance(e, sp.sin | sp.cos | sp.exp | sp.sinh | sp.cosh | sp.tanh | sp.atan):
         return _proven_real(e.args[0])
     return False
+
+
+def proven_real(e: sp.Expr) -> bool:
+    """Whether the structure of ``e`` proves it real wherever it is defined: numbers, real
+    symbols, sums and products, integer powers, positive bases to real powers, and sin,
+    cos, exp, sinh, cosh, tanh, atan of real arguments (nothing is evaluated)."""
+    try:
+        return _proven_real(e)
+    except RecursionError:
+        return False

@@ -69,6 +69,7 @@ from symmech.declaration.expressions import to_expression
 from symmech.declaration.numeric import (
     EvaluationError,
     classify_symmetric,
+    proven_real,
     proven_sign,
     rank_at,
     real_values,
@@ -936,7 +937,7 @@ def _check_real(e: sp.Expr, label: str, points: _Points, problems: _Problems) ->
     """Whether ``e`` is real at the sampled points: complex at every one where it has a
     value refuses it (``sqrt(-x**2 - 1)``, ``log(-1 - x**2)``), complex at some warns (its
     real domain is restricted, and symmech does not check that motions stay in it)."""
-    if not e.free_symbols:
+    if not e.free_symbols or proven_real(e):
         return True
     M = sp.Matrix([[e]])
     flags = []
