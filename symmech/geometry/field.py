@@ -114,6 +114,9 @@ class RationalField:
 
     def __init__(self, exprs: Sequence[sp.Expr], *, trig: bool = False):
         self.trig = trig
+        # distinct entries only: the work follows the structure (an identity metric of
+        # any size has the two entries 0 and 1)
+        exprs = list(dict.fromkeys(sp.sympify(e) for e in exprs))
         if trig:
             exprs = [_sin_cos(e) for e in exprs]
         self.forward = _generators(exprs)
@@ -145,6 +148,7 @@ class RationalField:
         self.pairs: list[tuple[int, int]] = []
         self._powers: dict[tuple[int, int], Any] = {}
         self._exprs: dict[Any, sp.Expr] = {}
+        self._elements: dict[sp.Expr, Frac] = {}
         if trig and self.K is not None and self.K.is_FractionField:
             index = {s: i for i, s in enumerate(self.K.symbols)}
             sines = {k.args[0]: v for k, v in self.forward.items() if isinstance(k, sp.sin)}
@@ -176,7 +180,15 @@ class RationalField:
         M = sp.Matrix(M)
         if self.K is None:
             return M
-        rows = [[self.K.from_sympy(self._in(e)) for e in M.row(i)] for i in range(M.rows)]
+        seen: dict[sp.Expr, Any] = {}
+
+        def convert(e: sp.Expr) -> Any:
+            x = seen.get(e)
+            if x is None:
+                x = seen[e] = self.K.from_sympy(self._in(e))
+            return x
+
+        rows = [[convert(e) for e in M.row(i)] for i in range(M.rows)]
         return DomainMatrix(rows, M.shape, self.K)
 
     def scalar(self, e: sp.Expr):
@@ -244,8 +256,12 @@ class RationalField:
         return self.K.field.new(a, b)
 
     def element(self, e: sp.Expr) -> Frac:
-        """The sympy expression e as a normalised field element."""
-        return self.normal(self.K.from_sympy(self._in(e)))
+        """The sympy expression e as a normalised field element (memoised: the entries
+        of a metric recur by symmetry, and a sparse one is mostly 0)."""
+        hit = self._elements.get(e)
+        if hit is None:
+            hit = self._elements[e] = self.normal(self.K.from_sympy(self._in(e)))
+        return hit
 
     def rows(self, M: sp.MatrixBase) -> Rows:
         """The entries of M as normalised field elements (a list of rows)."""
