@@ -1,11 +1,11 @@
 """Positive definiteness of a metric on the whole configuration space, not only at samples.
 
-The declaration first judges the metric g(q) at a few sampled points (``spec._check_metric``):
-indefinite at one of them refuses it.  A metric indefinite on a narrow part of the domain
-passes that test (``diag(1, 1 + 101/100 sin x)`` is indefinite only for ``|x + pi/2| <
-0.14``, ``diag(1, x**2 - 1/100)`` only for ``|x| < 0.1``).  :func:`definiteness` then
-decides, for the parameter values of each sampled point, over every value of the
-coordinates:
+The declaration first judges the metric g(q) at a few sampled points
+(:func:`symmech.declaration.checks.check_metric`): indefinite at one of them refuses it.
+A metric indefinite on a narrow part of the domain passes that test (``diag(1, 1 +
+101/100 sin x)`` is indefinite only for ``|x + pi/2| < 0.14``, ``diag(1, x**2 - 1/100)``
+only for ``|x| < 0.1``).  :func:`definiteness` then decides, for the parameter values of
+each sampled point, over every value of the coordinates:
 
 1. **proven** positive semidefinite everywhere (singular points are allowed, as in
    ``diag(1, r**2)``; a metric singular everywhere was refused before), by
