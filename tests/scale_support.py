@@ -12,7 +12,8 @@ Large or adversarial inputs, built by hand, each small to declare:
   (the gap ``(x + y + z + 1)**64 - 2``), :data:`POWER_64` (the potential
   ``(sin(x) + cos(y) + x*y*z + 1)**64``), :data:`DENSE_TRIG_3` (a dense trigonometric
   3 x 3 metric, the inertia tensor ``R diag(1, 2, 3) R^T`` of a rotated body plus
-  ``u u^T``, u trigonometric, with a curved wall).
+  ``u u^T``, u trigonometric, with a curved wall), :data:`DENSE_POLYNOMIAL_6`,
+  :data:`NESTED_EXP`.
 """
 
 from __future__ import annotations
@@ -115,6 +116,28 @@ WALL_POWER_64 = (
     'metric = ["1", "1", "1"]\n'
     "[[walls]]\n"
     'psi = "(x + y + z + 1)**64 - 2"\n'
+)
+
+
+def _dense_polynomial_text(n: int) -> str:
+    rows = ",\n  ".join(
+        "[" + ", ".join(f'"x{i}*x{j}{" + 1" if i == j else ""}"' for j in range(n)) + "]"
+        for i in range(n)
+    )
+    names = ", ".join(f'"x{i}"' for i in range(n))
+    return f'coordinates = [{names}]\nmetric = [\n  {rows}\n]\n[[walls]]\npsi = "x0 + x1*x2 + 3"\n'
+
+
+#: A dense polynomial 6 x 6 metric ``I + x x^T`` with a curved wall.
+DENSE_POLYNOMIAL_6 = _dense_polynomial_text(6)
+
+#: Nested exponentials in the potential, with a wall.
+NESTED_EXP = (
+    'coordinates = ["x", "y"]\n'
+    'metric = ["1", "1"]\n'
+    'potential = "exp(exp(exp(x*y)))*sin(x)**9"\n'
+    "[[walls]]\n"
+    'psi = "x + 2"\n'
 )
 
 #: A 3-coordinate scene whose potential is a 64th power of a trigonometric polynomial.

@@ -23,8 +23,10 @@ import numpy as np
 import pytest
 import sympy as sp
 from scale_support import (
+    DENSE_POLYNOMIAL_6,
     DENSE_TRIG_3,
     DIAGONAL_200,
+    NESTED_EXP,
     POWER_64,
     WALL_POWER_64,
     WALLS_100,
@@ -48,7 +50,15 @@ def _timed(build):
 
 
 def test_scene_files_are_small():
-    for text in (DIAGONAL_200, WALLS_100, WALL_POWER_64, POWER_64, DENSE_TRIG_3):
+    for text in (
+        DIAGONAL_200,
+        WALLS_100,
+        WALL_POWER_64,
+        POWER_64,
+        DENSE_TRIG_3,
+        DENSE_POLYNOMIAL_6,
+        NESTED_EXP,
+    ):
         assert len(text.encode()) < 10_000
 
 
@@ -135,6 +145,24 @@ def test_dense_trigonometric_metric_with_a_wall_generates_and_solves():
     expected = [float(e) for e in kkt_at(scene, 0, point, v_minus)]
     got = mod.impact([float(point[s]) for s in scene.coordinates], [float(e) for e in v_minus])
     np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("text", [DENSE_POLYNOMIAL_6, NESTED_EXP], ids=["dense_6", "exp3"])
+def test_other_hostile_scene_files_accelerate_right(text):
+    """The acceleration of the generated code (whichever strategy auto takes) against
+    numpy.linalg.solve of g and f evaluated by sympy at 30 digits."""
+    scene = sm.loads_scene(text).scene
+    code, elapsed = _timed(lambda: codegen.generate(scene, "numpy"))
+    assert elapsed < GUARD, f"{elapsed:.1f} s"
+    mod = code.load()
+    n = scene.n
+    q_num = [0.1 * (k + 1) * (-1) ** k for k in range(n)]
+    v_num = [0.3 - 0.1 * k for k in range(n)]
+    at = dict(zip(scene.coordinates, q_num, strict=True))
+    at.update(dict(zip(scene.velocities, v_num, strict=True)))
+    G = np.array(sp.Matrix(scene.mass_matrix()).xreplace(at).evalf(30), dtype=float)
+    F = np.array(sp.Matrix(scene.forcing()).xreplace(at).evalf(30), dtype=float).ravel()
+    np.testing.assert_allclose(mod.acceleration(q_num, v_num), np.linalg.solve(G, F), rtol=1e-11)
 
 
 def test_four_link_cart_with_a_tip_wall_linear_solve():
