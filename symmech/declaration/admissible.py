@@ -115,6 +115,7 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
     # kind -> (first entry index, names found)
     found: dict[str, tuple[int, dict[str, None]]] = {}
     seen: set[sp.Basic] = set()
+    ranged: set[int] = set()  # entries holding constants other than small rationals
 
     def note(kind: str, k: int, name: str = "") -> None:
         found.setdefault(kind, (k, {}))[1][name] = None
@@ -135,6 +136,9 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
                     note("infinite", k)
                 elif not (e.is_Symbol or e.is_Number or e.is_NumberSymbol):
                     note("unsupported", k, _name(e))
+                elif not e.is_Symbol and not _small_rational(e):
+                    # a float, pi, a large rational: merged constants may leave float64
+                    ranged.add(k)
                 continue
             if isinstance(e, sp.Derivative):
                 if not isinstance(e.expr, AppliedUndef):
@@ -146,6 +150,8 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
                 or e.is_Mul
                 or e.is_Pow
             ):
+                if sum(a.is_Number for a in e.args) >= (1 if e.is_Function else 2):
+                    ranged.add(k)  # exp(709), 2**2000 or 10*10 left unevaluated
                 stack.extend(e.args)
             elif isinstance(e, sp.Integral | sp.Sum | sp.Product | sp.Subs | sp.Limit | sp.Order):
                 note("unevaluated", k, _name(e))
@@ -175,7 +181,8 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
     if out:
         return out
     for k, e in enumerate(entries):
-        bad = constant_out_of_range(e)
+        # sympy merges small rationals into a small rational; anything else is judged
+        bad = constant_out_of_range(e) if k in ranged else None
         if bad is not None:
             what = (
                 f"the constant {_short(bad.constant)}"
@@ -185,6 +192,12 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
             )
             return [f"{where(k)}holds {what}, {bad.reason}"]
     return []
+
+
+def _small_rational(e: sp.Basic) -> bool:
+    """A rational whose numerator and denominator are below 2^64 (merging such numbers by
+    products and powers within the parser's limits stays inside float64)."""
+    return bool(e.is_Rational) and max(int(e.p).bit_length(), int(e.q).bit_length()) <= 64
 
 
 def _short(expr: object, limit: int = 50) -> str:

@@ -159,6 +159,13 @@ def range_problem(constant: sp.Expr) -> str | None:
         if bits > MAX_NUMBER_BITS:
             digits = math.ceil(bits * math.log10(2))
             return f"of about {digits} digits (limit {MAX_NUMBER_DIGITS})"
+        return None  # p/q with p, q < 2^333 lies well inside float64
+    if isinstance(constant, sp.Float):
+        x = float(constant)
+        if math.isfinite(x) and (x != 0.0 or constant.is_zero):
+            return None
+    elif constant.is_NumberSymbol:
+        return None  # pi, E, EulerGamma, ...
     x = float_value(constant)
     if x is None:
         return None
