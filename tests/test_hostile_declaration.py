@@ -231,6 +231,15 @@ def test_complex_fields_are_refused():
         sm.Wall(y - sp.I)
 
 
+def test_symbols_declared_non_real_are_refused():
+    z = sp.Symbol("z", imaginary=True)
+    assert (1 + z**2).subs(z, 2 * sp.I) < 0  # independent: the entry can be negative
+    err = refused(metric=sp.diag(1, 1 + z**2))
+    assert has(err, "metric: entry [1,1] = z**2 + 1: is not real", "declared non-real (z")
+    err = refused(metric=sp.eye(2), potential=z * x)
+    assert has(err, "potential: is not real", "(z")
+
+
 @pytest.mark.parametrize("bad", [sp.sqrt(-(x**2) - 1), sp.log(-1 - x**2), sp.asin(2 + x**2)])
 def test_fields_never_real_are_refused(bad: sp.Expr):
     # independent route: complex at a few points by sympy's own evaluation
@@ -359,12 +368,27 @@ def test_merged_constants_outside_float64_are_refused_in_every_field(value, magn
         sp.Rational(10**400, 3) * x,
         sp.Rational(1, 10**400) + x,
         sp.Rational(10**150 + 1, 10**150) * x,
+        sp.Mul(sp.Integer(10) ** 200, sp.Integer(10) ** 200, x, evaluate=False),
     ],
-    ids=["10**308*10", "10**400/3", "1/10**400", "150 digits"],
+    ids=["10**308*10", "10**400/3", "1/10**400", "150 digits", "unevaluated product"],
 )
 def test_huge_exact_numbers_are_refused(value: sp.Expr):
     err = refused(metric=sp.eye(2), potential=value)
-    assert has(err, "potential: holds the constant", "digits (limit 100)"), err.problems
+    assert has(err, "potential: holds the", "digits (limit 100)") or has(
+        err, "potential: holds the", "float64"
+    ), err.problems
+
+
+def test_constants_of_other_fields_and_sympy_floats():
+    # a sympy Float holds 1e400 (its exponent is unbounded); float64 does not
+    assert mpmath.mpf(10) ** 400 > F64_MAX
+    err = refused(metric=sp.eye(2), potential=sp.Float("1e400") * x)
+    assert has(err, "potential: holds the constant", "outside the range of float64")
+    err = refused(metric=sp.eye(2), walls=[sm.Wall(y, restitution=sp.exp(-800))])
+    assert has(err, "walls[0].restitution: holds the constant exp(-800)", "underflows")
+    xd, yd = sm.velocities(Q)
+    err = refused(metric=sp.eye(2), constraints=[xd + sp.exp(709) * sp.exp(709) * yd])
+    assert has(err, "constraints[0]: holds the", "exp(1418)", "float64")
 
 
 @pytest.mark.parametrize(

@@ -17,7 +17,8 @@ therefore built from
 derivatives sympy may not know (``zeta(x)`` differentiated raises a raw sympy
 ``ArgumentIndexError`` whose ``str()`` itself raises) and whose real domain symmech cannot
 check; unevaluated operations (``Integral``, ``Sum``, ``Subs``, a ``Derivative`` of
-anything but an undefined function); the imaginary unit ``I`` (a field is real); infinite
+anything but an undefined function); the imaginary unit ``I`` and symbols declared
+non-real (a field is real); infinite
 or undefined values (``oo``, ``zoo``, ``nan``); and constants outside float64 after sympy
 merged them (:mod:`symmech.declaration.constants`).  Non-smooth functions (:data:`NON_SMOOTH`:
 ``Abs``, ``Piecewise``, ...) are reported on their own by the declaration.
@@ -136,6 +137,8 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
                     note("infinite", k)
                 elif not (e.is_Symbol or e.is_Number or e.is_NumberSymbol):
                     note("unsupported", k, _name(e))
+                elif e.is_Symbol and e.is_extended_real is False:
+                    note("nonreal", k, _short(e))
                 elif not e.is_Symbol and not _small_rational(e):
                     # a float, pi, a large rational: merged constants may leave float64
                     ranged.add(k)
@@ -160,6 +163,12 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
     out = []
     if "imaginary" in found:
         out.append(f"{where(found['imaginary'][0])}is not real: it holds the imaginary unit I")
+    if "nonreal" in found:
+        k, names = found["nonreal"]
+        out.append(
+            f"{where(k)}is not real: it holds symbols declared non-real ({', '.join(names)},"
+            " e.g. imaginary=True); a scene's symbols are real"
+        )
     if "infinite" in found:
         out.append(
             f"{where(found['infinite'][0])}holds an infinite or undefined value (oo, zoo or"
