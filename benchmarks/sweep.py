@@ -5,7 +5,8 @@ case runs: persistent), ``--runs`` runs over a grid of initial states (one param
 vector, so the baseline below runs the same thing) go through
 
 * **baseline**: ``sm.simulate_batch(..., threads=1)``: the bare C batch loop, one call,
-  no table, no per-run Python;
+  no table, no per-run Python (and the same on every core: what the machine allows, so a
+  loaded machine shows in this row, not as the sweep's overhead);
 * **sweep, 1 thread**: ``sm.sweep(..., threads=1)``;
 * **sweep, local**: ``sm.sweep(..., threads=<cores>)``;
 * **sweep, Dask**: ``sm.sweep(..., client=Client(LocalCluster(n_workers=<cores>,
@@ -16,13 +17,15 @@ vector, so the baseline below runs the same thing) go through
 Printed per route: runs per second; seconds per run; the route's overhead per run over the
 baseline's CPU time per run (``(workers x T_route - T_baseline) / N``, as a fraction of
 the baseline's time per run); the parallel efficiency ``T_1 thread / (workers x
-T_route)``.  Targets (issue 15): local parallel efficiency >= 80% on 2 cores, Dask
-overhead < 10% of run time at chunks of 10^4 runs.  Memory: the resident set size of
-each Dask worker after a sweep of N runs and after one of ``--grow`` x N runs (flat if the
-results are streamed, not held).  ``--big N`` also runs an N-run ellipse sweep locally and
-on the cluster, reports both times and whether the tables are identical (bit for bit).
+T_route)``; and ``simulate_batch``'s time on as many threads over the route's (the
+route's cost over the bare C loop whatever the machine's load).  Targets (issue 15):
+local parallel efficiency >= 80% on 2 cores, Dask overhead < 10% of run time at chunks of
+10^4 runs.  Memory: the resident set size of each Dask worker after a sweep of N runs and
+after one of ``--grow`` x N runs (flat if the results are streamed, not held).  ``--big
+N`` also runs an N-run ellipse sweep locally and on the cluster, reports both times and
+whether the tables are identical (bit for bit).
 
-Run from the repository root: ``python3 benchmarks/sweep.py`` (about 3 minutes on 2
+Run from the repository root: ``python3 benchmarks/sweep.py`` (about 8 minutes on 2
 cores), ``python3 benchmarks/sweep.py --big 100000``.  Timings on a shared machine are
 indicative; nothing here is asserted by the tests.
 """
@@ -111,6 +114,9 @@ def main() -> None:
             t_base, _ = _timed(
                 sm.simulate_batch, scene, Q, V, c.t_end, params=kw["params"], threads=1
             )
+            t_base2, _ = _timed(
+                sm.simulate_batch, scene, Q, V, c.t_end, params=kw["params"], threads=cores
+            )
             t_one, one = _timed(sm.sweep, scene, grid, c.t_end, threads=1, **kw)
             t_loc, loc = _timed(sm.sweep, scene, grid, c.t_end, threads=cores, **kw)
             t_dask, dsk = _timed(
@@ -121,15 +127,25 @@ def main() -> None:
             per = t_base / N
             for route, T, workers in (
                 ("baseline: simulate_batch, 1 thread", t_base, 1),
+                (f"simulate_batch, {cores} threads", t_base2, cores),
                 ("sweep, 1 thread", t_one, 1),
                 (f"sweep, local {cores} threads", t_loc, cores),
                 (f"sweep, Dask {cores} workers (chunk {args.dask_chunk})", t_dask, cores),
             ):
                 overhead = (workers * T - t_base) / N
+                batch = t_base if workers == 1 else t_base2
                 rows.append(
-                    (name, route, N / T, T / N * 1e6, overhead / per, t_one / (workers * T))
+                    (
+                        name,
+                        route,
+                        N / T,
+                        T / N * 1e6,
+                        overhead / per,
+                        t_one / (workers * T),
+                        batch / T,
+                    )
                 )
-            rows.append((name, f"tables identical across routes: {same}", 0, 0, 0, 0))
+            rows.append((name, f"tables identical across routes: {same}", 0, 0, 0, 0, 0))
             if name == "ellipse_gravity":
                 before = _rss(client)
                 grown = {k: np.linspace(v[0], v[-1], args.grow * N) for k, v in grid.items()}
@@ -143,16 +159,17 @@ def main() -> None:
         print(f"sweep benchmark: {args.runs} runs per case, {cores} cores")
         print(
             f"{'case':16} {'route':44} {'runs/s':>9} {'us/run':>9} {'overhead':>9}"
-            f" {'efficiency':>10}"
+            f" {'efficiency':>10} {'C batch/T':>9}"
         )
-        for name, route, rate, us, over, eff in rows:
+        for name, route, rate, us, over, eff, rel in rows:
             if rate == 0:
                 print(f"{name:16} {route}")
                 continue
-            print(f"{name:16} {route:44} {rate:9.0f} {us:9.1f} {over:9.1%} {eff:10.1%}")
+            print(f"{name:16} {route:44} {rate:9.0f} {us:9.1f} {over:9.1%} {eff:10.1%} {rel:9.2f}")
         print(
             "overhead: (workers x T - T_baseline) / N over the baseline's time per run;"
-            " efficiency: T_1 thread / (workers x T)"
+            " efficiency: T_1 thread / (workers x T); C batch/T: simulate_batch's time on as"
+            " many threads over the route's (1: no cost over the bare C loop)"
         )
         if memory:
             before, after_n, after_grow, t_grow = memory

@@ -13,7 +13,7 @@ Row i of the result is ``simulate(scene, q0_i, v0_i, t_end, params=params_i,
 backend="c", ...)`` summarised (its final state equal to ``res.q[-1]``, ``res.v[-1]`` of
 that run bit for bit): the grid's columns, ``status`` (``"finished"``, ``"zeno"``,
 ``"max_events"``, ``"failed"``, or ``"invalid"`` for a run refused by the input checks),
-``message`` (None where finished), ``t_final``, ``<coordinate>_final`` and
+``message`` (missing where finished), ``t_final``, ``<coordinate>_final`` and
 ``<velocity>_final``, ``time_to_rest`` (the accumulation time, or the time the body came
 to rest on a wall, of a run that stopped there, as ``res.accumulation_time``; NaN
 otherwise: with ``contact="persistent"`` the loop continues in contact and reports no
@@ -213,11 +213,11 @@ def sweep(
     :data:`OUTPUTS`; ``expressions``: ``{column: expression}`` evaluated at each final
     state (strings are parsed by symmech's whitelist parser, never evaluated).  Without
     ``client`` the chunks run in ``threads`` threads (default: every core); with a
-    ``dask.distributed.Client`` they run as Dask tasks on its cluster.  ``chunk``: runs per
-    chunk (default ``ceil(N / (4 workers))``, at most 10^4).  ``store``: a folder that
-    receives each finished chunk as a Parquet part; a rerun of the same sweep skips the
-    chunks stored (:mod:`symmech.sweep.store`).  ``progress``: a progress bar on stderr
-    (default: on a terminal, after a second).  The other options are
+    ``dask.distributed.Client`` they run as Dask tasks on its cluster (``threads`` unused).
+    ``chunk``: runs per chunk (default ``ceil(N / (4 workers))``, at most 10^4).
+    ``store``: a folder that receives each finished chunk as a Parquet part; a rerun of the
+    same sweep skips the chunks stored (:mod:`symmech.sweep.store`).  ``progress``: a
+    progress bar on stderr (default: on a terminal, after a second).  The other options are
     :func:`symmech.simulate.simulate`'s, shared by every run.  The results do not depend on
     ``chunk``, ``threads`` or the route: each run is independent and runs the same C code.
     """

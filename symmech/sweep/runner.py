@@ -116,7 +116,9 @@ def run_local(plan: Plan, chunks: Iterable[Chunk], threads: int, sink: Sink) -> 
             fill()
 
 
-def run_dask(plan: Plan, chunks: Iterable[Chunk], client: Any, window: int, sink: Sink, tag: str):
+def run_dask(
+    plan: Plan, chunks: Iterable[Chunk], client: Any, window: int, sink: Sink, tag: str
+) -> None:
     """Run ``chunks`` as Dask tasks on ``client``'s cluster, at most ``window`` in flight.
     ``tag`` makes the task keys of this sweep (``symmech-sweep-<tag>-<chunk>``)."""
     from distributed import as_completed
