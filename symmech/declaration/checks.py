@@ -21,7 +21,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from symmech.declaration.admissible import NON_SMOOTH, expression_problems
-from symmech.declaration.definiteness import definiteness
+from symmech.declaration.definiteness import Verdict, definiteness
 from symmech.declaration.numeric import (
     EvaluationError,
     classify_symmetric,
@@ -58,6 +58,10 @@ __all__ = [
     "metric_of_kinetic_energy",
     "short",
 ]
+
+# Arithmetic failures of the numerical searches (never an error of the user's input): they
+# leave the property undecided, and the declaration says so.
+_NUMERIC_FAILURES = (ArithmeticError, ValueError, TypeError, RecursionError)
 
 _SAMPLES = 4
 #: ... and points away from the origin (angles near +-pi), see sampling.sample_points.
@@ -398,7 +402,10 @@ def _check_everywhere(
     T: sp.Expr | None,
 ) -> None:
     """Positive definiteness away from the sampled points (see :func:`definiteness`)."""
-    verdict = definiteness(G, q, pts, kinetic_energy=T)
+    try:
+        verdict = definiteness(G, q, pts, kinetic_energy=T)
+    except _NUMERIC_FAILURES as exc:  # a failure of the search is no verdict
+        verdict = Verdict("undecided", f"the search failed ({type(exc).__name__})")
     if verdict.status == "refuted":
         where = _at(verdict.point, G).replace(" at the sampled point", " at the point")
         problems.add(
@@ -453,7 +460,10 @@ def check_wall_gradient(
     """Refuse a wall whose gradient vanishes on it (``x**2``, ``sin(x)**2``, ``(x - 1)**2*(y
     + 2)``); warn when no point of the wall was found to check (see
     :mod:`symmech.declaration.wallpoints`)."""
-    point, found = vanishing_gradient(psi, q, points.for_(psi))
+    try:
+        point, found = vanishing_gradient(psi, q, points.for_(psi))
+    except _NUMERIC_FAILURES:  # a failure of the root finding finds no point
+        point, found = None, 0
     if point is not None:
         shown = ", ".join(
             f"{k}={sp.N(v, 6) if isinstance(v, sp.Float) else v}"

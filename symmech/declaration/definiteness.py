@@ -395,7 +395,10 @@ def _diagonal(
                 continue
             if exact is not None:
                 point = {**sample, own[0]: exact[1]}
-                A, _ = real_values(G, point)
+                try:
+                    A, _ = real_values(G, point)
+                except EvaluationError:  # another entry undefined there: the entry says it
+                    return Verdict("refuted", f"diagonal entry [{i},{i}] < 0", point)
                 return Verdict("refuted", classify_symmetric(A)[1], point)
         mine = [c for c in q if c in e.free_symbols]
         value, where = _compass(_entry(e), _float_point(sample), mine, budget)
