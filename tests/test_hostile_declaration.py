@@ -435,3 +435,14 @@ def test_merged_constants_are_refused_by_the_parser_and_in_scene_files(text: str
 def test_merged_constants_in_a_wall_of_a_scene_file():
     err = file_refused(BASE + '[[walls]]\npsi = "y - exp(709)*exp(709)"\n')
     assert err.details[0][:2] == ("walls[0].psi", 4), err.details
+
+
+def test_walls_given_as_strings_are_checked_like_sympy_walls():
+    for text, needle in [
+        ("x**2", "gradient d psi/dq vanishes on the wall"),
+        ("zeta(x)", "function 'zeta' is not allowed"),
+        ("y - exp(709)*exp(709)", "outside the range of float64"),
+        ("sqrt(-x**2 - 1)", "not real at any sampled point"),
+    ]:
+        err = refused(metric=sp.eye(2), walls=[sm.Wall(text)])
+        assert has(err, "walls[0].psi", needle), err.problems
