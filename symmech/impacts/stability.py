@@ -107,13 +107,32 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     st = frozenset(state)
     if _already_stable(expr, st) or limits.expanded_terms(expr)[0] > limits.STABLE_TERMS:
         return expr
+    # exponentials are opaque generators: the polynomial algebra would split exp(a + b)
+    # into exp(a) exp(b), and exp(-(x - c)^2/s^2) into exp(2cx/s^2) exp(-x^2/s^2)
+    # exp(-c^2/s^2), whose factors overflow where the exponential itself is tiny
+    expr, opaque = _opaque_exponentials(expr)
+    st = st | {d for d, e in opaque.items() if e.free_symbols & st}
     c = sp.cancel(sp.together(expr))
     num, den = sp.fraction(c)
     try:
         num, den = sp.factor(num), sp.factor(den)
     except sp.PolynomialError:  # pragma: no cover - factor refuses some exotic generators
-        return c
-    return _refactor(num, st) / _refactor(den, st)
+        return c.xreplace(opaque)
+    return (_refactor(num, st) / _refactor(den, st)).xreplace(opaque)
+
+
+def _opaque_exponentials(expr: sp.Expr) -> tuple[sp.Expr, dict[sp.Dummy, sp.Expr]]:
+    """``expr`` with every ``exp(...)`` replaced by a dummy symbol, and the map back."""
+    opaque: dict[sp.Dummy, sp.Expr] = {}
+    found = sorted(expr.atoms(sp.exp), key=sp.default_sort_key)
+    if not found:
+        return expr, opaque
+    subs = {}
+    for e in found:
+        d = sp.Dummy("exp")
+        subs[e] = d
+        opaque[d] = e
+    return expr.xreplace(subs), opaque
 
 
 def _linear(e: sp.Expr) -> bool:

@@ -167,8 +167,8 @@ def simulate(
             return ScipyFlow(f, method, rtol_f, atol_f, step_cap, jac=jac)
     else:
         fixed = None
-        if method == "rk4":
-            fixed = step_cap if max_step is not None else span / 1000
+        if method == "rk4":  # the C loop's rule (csim.options_vector)
+            fixed = step_cap if step_cap < span else span / 1000
 
         def make(f: Any, jac: Any = None) -> Any:
             return RKFlow(f, method, rtol_f, atol_f, step_cap, jac=jac, fixed_step=fixed)

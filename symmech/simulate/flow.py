@@ -155,6 +155,14 @@ class RKFlow:
         self.t, self.y, self.fy = t1, st.y, st.f
         return seg
 
+    def limit_step(self, h: float) -> None:
+        """Restart no longer than ``h`` (the step the loop just cut at an event): the next
+        event is then located on a step of the motion's own scale, whose dense output
+        rounds relative to that scale (a polynomial motion lets the step grow without
+        bound otherwise)."""
+        if self.h is not None and 0 < h < self.h:
+            self.h = h
+
     def accept_projection(self, y: np.ndarray) -> None:
         """The loop replaced the step's end state (constraint projection): recompute f."""
         self.y = np.array(y, dtype=float)
@@ -218,6 +226,11 @@ class ScipyFlow:
         self.h = s.step_size if s.step_size else self.h
         dense = s.dense_output()
         return Segment(t0, float(s.t), y0, s.y.copy(), None, lambda tt, _d=dense: _d(tt))
+
+    def limit_step(self, h: float) -> None:
+        """As :meth:`RKFlow.limit_step` (the next solver's first step)."""
+        if self.h is not None and 0 < h < self.h:
+            self.h = h
 
     def accept_projection(self, y: np.ndarray) -> None:
         """The loop replaced the end state: restart the solver there."""
@@ -288,6 +301,9 @@ class AugmentedFlow:
 
         f1 = None if seg.f1 is None else seg.f1[:k]
         return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense)
+
+    def limit_step(self, h: float) -> None:
+        self.inner.limit_step(h)
 
     def accept_projection(self, y: np.ndarray) -> None:
         t = self.inner.t if hasattr(self.inner, "t") else float(self.inner.solver.t)

@@ -53,6 +53,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from symmech.codegen.module import NumericalError
 from symmech.simulate.events import find_root
 from symmech.simulate.flow import FlowFailure, Segment
 from symmech.simulate.result import Event, SimulationResult
@@ -82,6 +83,7 @@ class Flow(Protocol):
 
     def start(self, t: float, y: np.ndarray, t_bound: float) -> None: ...
     def advance(self) -> Segment: ...
+    def limit_step(self, h: float) -> None: ...
     def accept_projection(self, y: np.ndarray) -> None: ...
 
 
@@ -478,11 +480,14 @@ class _Run:
                 else:
                     self.at_wall(wall)
                 self.record(self.t, self.y)
+                self.flow.limit_step(t_e - seg.t0)
                 self.flow.start(self.t, self.y, t_end)
         except _Stop as stop:
             return stop.status, stop.message, stop.accumulation
         except FlowFailure as exc:
             return "failed", str(exc), None
+        except NumericalError as exc:  # a generated call failed at an accepted state
+            return "failed", f"{exc} at t = {float(self.t)!r}", None
         return "finished", f"reached t_end = {float(t_end)!r}", None
 
     def track_energy(self) -> None:

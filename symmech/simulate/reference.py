@@ -253,6 +253,11 @@ class MpFlow:
         self.t, self.y, self.fy = t1, st.y, st.f
         return seg
 
+    def limit_step(self, h: Any) -> None:
+        """As :meth:`~.flow.RKFlow.limit_step`."""
+        if self.h is not None and 0 < h < self.h:
+            self.h = h
+
     def accept_projection(self, y: np.ndarray) -> None:
         self.y = _mp_array(y)
         self.fy = self._rhs(self.t, self.y)

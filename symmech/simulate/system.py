@@ -356,8 +356,12 @@ class Functions:
         return self.rhs(self.mode, t, y)
 
     def flow_rates(self, t: float, y: np.ndarray, ydot: np.ndarray) -> np.ndarray:
-        """d psi_w/dt of every wall along the flow (for :class:`~.flow.AugmentedFlow`)."""
-        return np.array([self.rate(w, t, y, ydot) for w in range(self.walls)])
+        """d psi_w/dt of every wall along the flow (for :class:`~.flow.AugmentedFlow`); NaN
+        where a generated call fails at a trial stage (the integrator then rejects it)."""
+        try:
+            return np.array([self.rate(w, t, y, ydot) for w in range(self.walls)])
+        except NumericalError:
+            return np.full(self.walls, np.nan)
 
     def gaps(self, t: float, y: np.ndarray) -> np.ndarray:
         """psi_w(t, q) of every wall."""
