@@ -21,9 +21,11 @@ T_route)``; and ``simulate_batch``'s time on as many threads over the route's (t
 route's cost over the bare C loop whatever the machine's load).  Targets (issue 15):
 local parallel efficiency >= 80% on 2 cores, Dask overhead < 10% of run time at chunks of
 10^4 runs.  Memory: the resident set size of each Dask worker after a sweep of N runs and
-after one of ``--grow`` x N runs (flat if the results are streamed, not held).  ``--big
-N`` also runs an N-run ellipse sweep locally and on the cluster, reports both times and
-whether the tables are identical (bit for bit).
+after one of ``--grow`` x N runs (flat if the results are streamed, not held).  Load
+independent: the share of a 1-thread sweep's CPU time spent outside the C loop (Python,
+holding the GIL), from CPU clocks, and the Amdahl bound it sets on the local efficiency.
+``--big N`` also runs an N-run ellipse sweep locally and on the cluster, reports both
+times and whether the tables are identical (bit for bit).
 
 Run from the repository root: ``python3 benchmarks/sweep.py`` (about 8 minutes on 2
 cores), ``python3 benchmarks/sweep.py --big 100000``.  Timings on a shared machine are
@@ -79,6 +81,30 @@ def _rss(client) -> list[float]:
     return sorted(client.run(rss).values())
 
 
+def _serial_share(scene, grid, t_end: float, kw: dict) -> float:
+    """The share of a 1-thread sweep's CPU time spent outside the C loop (Python holding
+    the GIL: checks, tables), from CPU clocks, so the machine's load does not enter."""
+    from symmech.sweep import runner
+
+    spent = [0.0]
+    real = runner.run_chunk
+
+    def timed(*args):
+        start = time.thread_time()
+        out = real(*args)
+        spent[0] += time.thread_time() - start
+        return out
+
+    runner.run_chunk = timed
+    try:
+        start = time.process_time()
+        sm.sweep(scene, grid, t_end, threads=1, **kw)
+        total = time.process_time() - start
+    finally:
+        runner.run_chunk = real
+    return (total - spent[0]) / total
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=20_000)
@@ -123,6 +149,8 @@ def main() -> None:
                 sm.sweep, scene, grid, c.t_end, client=client, chunk=args.dask_chunk, **kw
             )
             same = one.equals(loc) and one.equals(dsk)
+            serial = _serial_share(scene, grid, c.t_end, kw)
+            amdahl = 1 / (cores * (serial + (1 - serial) / cores))
             N = args.runs
             per = t_base / N
             for route, T, workers in (
@@ -146,6 +174,14 @@ def main() -> None:
                     )
                 )
             rows.append((name, f"tables identical across routes: {same}", 0, 0, 0, 0, 0))
+            rows.append(
+                (
+                    name,
+                    f"CPU share outside the C loop {serial:.1%}: Amdahl bound of the local"
+                    f" efficiency on {cores} cores {amdahl:.1%}",
+                    0, 0, 0, 0, 0,
+                )
+            )  # fmt: skip
             if name == "ellipse_gravity":
                 before = _rss(client)
                 grown = {k: np.linspace(v[0], v[-1], args.grow * N) for k, v in grid.items()}
