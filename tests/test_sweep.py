@@ -307,3 +307,26 @@ def test_command_writes_the_table_of_sm_sweep(tmp_path, capsys):
     bad = ["bouncing_ball", "--grid", str(tmp_path / "grid.txt"), "--out", str(tmp_path / "o.csv")]
     with pytest.raises(sm.SymmechError, match="--grid"):
         run_command(_sweep_args([*bad, "--t-end", "1"]), read_scene, print)
+
+
+def test_constrained_scene_rows_are_projected_and_checked_as_simulate_does():
+    """Carnot 3.13 (rolling sphere, quasi-velocities): a v0 slightly off D is projected
+    with P as simulate projects it (same final state bit for bit), one far off D is an
+    invalid row carrying simulate's own message."""
+    c = case("carnot_3_13")
+    scene, params = c.scene(), c.params()
+    v = list(c.v0)
+    grid = {"v0[0]": [v[0], v[0] + 1e-9, v[0] + 1.0], "omega_z0": [v[5], v[5], v[5]]}
+    tab = sm.sweep(scene, grid, 0.5, params=params, q0=list(c.q0), v0=v)
+    assert tab["status"].tolist()[:2] == ["finished", "finished"]
+    for i in (0, 1):
+        v0 = [grid["v0[0]"][i], *v[1:]]
+        res = sm.simulate(scene, list(c.q0), v0, 0.5, params=params)
+        names = [f"{s}_final" for s in ("x", "y", "z", "phi", "theta", "psi")]
+        assert tab.loc[i, names].tolist() == res.q[-1].tolist()
+        names = [f"{s}_final" for s in ("v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z")]
+        assert tab.loc[i, names].tolist() == res.v[-1].tolist()
+    with pytest.raises(SimulationError) as refused:
+        sm.simulate(scene, list(c.q0), [v[0] + 1.0, *v[1:]], 0.5, params=params)
+    assert tab.loc[2, "status"] == "invalid"
+    assert tab.loc[2, "message"] == str(refused.value)
