@@ -220,8 +220,9 @@ def test_bad_arguments_are_refused():
         sm.sweep(ball, {"y0": [1.0]}, 1.0, params=BALL)
     with pytest.raises(SimulationError, match="unknown \\['mass'\\]"):
         sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params={**BALL, "mass": 1})
-    with pytest.raises(SimulationError, match="outputs"):
-        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, outputs=("power",))
+    for outputs in (("power",), "energy", None):
+        with pytest.raises(SimulationError, match="outputs"):
+            sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, outputs=outputs)
     with pytest.raises(SimulationError, match="t_end must be greater"):
         sm.sweep(ball, {"y0": [1.0]}, 0.0, v0=[0], params=BALL)
     with pytest.raises(SimulationError, match="chunk must be a positive integer"):

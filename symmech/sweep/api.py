@@ -256,8 +256,11 @@ def sweep(
                 missing.append(f"{what} (no column sets {free} and {what} is not given)")
     if missing:
         raise SimulationError(f"sweep: missing values for {missing}")
-    unknown_out = [o for o in outputs if o not in OUTPUTS] if not isinstance(outputs, str) else []
-    if isinstance(outputs, str) or unknown_out:
+    if isinstance(outputs, str) or not isinstance(outputs, Sequence):
+        unknown_out = [outputs]
+    else:
+        unknown_out = [o for o in outputs if o not in OUTPUTS]
+    if unknown_out:
         raise SimulationError(
             f"outputs: expected a sequence of names from {OUTPUTS}, got {outputs!r}"
         )
