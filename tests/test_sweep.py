@@ -225,6 +225,8 @@ def test_bad_arguments_are_refused():
             sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, outputs=outputs)
     with pytest.raises(SimulationError, match="t_end must be greater"):
         sm.sweep(ball, {"y0": [1.0]}, 0.0, v0=[0], params=BALL)
+    with pytest.raises(SimulationError, match="store: expected a folder path"):
+        sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, store=3)
     with pytest.raises(SimulationError, match="chunk must be a positive integer"):
         sm.sweep(ball, {"y0": [1.0]}, 1.0, v0=[0], params=BALL, chunk=0)
     with pytest.raises(SimulationError, match=r"expected a dask\.distributed\.Client"):

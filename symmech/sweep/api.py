@@ -270,6 +270,8 @@ def sweep(
     clash = sorted(({*outputs} | set(exprs)) & taken) + sorted(set(outputs) & set(exprs))
     if clash or len(set(outputs)) != len(outputs):
         raise SimulationError(f"outputs and expressions: repeated column names {clash}")
+    if store is not None and not isinstance(store, str | os.PathLike):
+        raise SimulationError(f"store: expected a folder path, got {store!r}")
     if threads is None:
         threads = os.cpu_count() or 1
     threads = _positive_int(threads, "threads")
