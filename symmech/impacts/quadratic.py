@@ -107,8 +107,14 @@ class QuadraticForm:
 
 
 def _clean(e: sp.Expr, simplify: bool) -> sp.Expr:
+    """A coefficient cancelled (and simplified when asked and small); returned as it is,
+    exact but not normalised, when its expansion is over :data:`symmech.budget.FIELD_TERMS`
+    (the bound the fraction field declines at: ``cancel`` of such a coefficient takes
+    minutes, and the callers decide zero by exact evaluation instead)."""
     e = sp.sympify(e)
     if e == 0 or e.is_number:
+        return e
+    if limits.expanded_terms(e, cap=limits.FIELD_TERMS + 1)[0] > limits.FIELD_TERMS:
         return e
     e = sp.cancel(e)
     if (
