@@ -22,15 +22,17 @@ Commands:
 ``symmech export [SCENE] [-o FILE]``
     Write a scene as a TOML scene file (to start a new scene from a built-in one).
 
-``symmech simulate``, ``symmech bench`` and ``symmech stress`` are not available in this
-version (there is no simulator yet): each prints one line saying so, and what to use
-instead, and exits with code 2.
+``symmech simulate SCENE``, ``symmech bench CASE``, ``symmech stress``
+    Simulate a scene, print its error against run time, run the stiff and extreme cases
+    (:mod:`symmech.bench.commands`).
+``symmech sweep SCENE --grid FILE --out FILE``
+    Run the scene for every row of a grid (:mod:`symmech.sweep.command`).
 
 SCENE is a scene file (TOML, :mod:`symmech.scenefile`) or the name of a built-in scene.
 With no command, ``show`` runs on the bouncing ellipse.  Progress (stage and elapsed time)
 goes to stderr; ``--quiet`` silences it.  Errors print one line and exit non-zero, with no
 traceback unless ``--debug``.  Exit codes: 0 success, 1 a verification failed, 2 bad input
-(unknown scene, refused scene file, usage, a command not available), 3 an internal error,
+(unknown scene, refused scene file, usage), 3 an internal error,
 130 interrupted.  Output that the terminal's encoding cannot represent is written with
 backslash escapes (``PYTHONIOENCODING=ascii``), and ``show`` then pretty-prints in ASCII.
 
@@ -54,6 +56,7 @@ from typing import NoReturn
 
 import sympy as sp
 
+from symmech.bench.commands import COMMANDS, add_commands, run_command
 from symmech.codegen.escape import file_name, terminal
 from symmech.codegen.output_files import write_text_atomic
 from symmech.declaration.latex import latex_text
@@ -69,6 +72,8 @@ from symmech.scenefile import (
     dump_scene,
     read_scene,
 )
+from symmech.sweep.command import add_command as add_sweep_command
+from symmech.sweep.command import run_command as run_sweep_command
 
 __all__ = [
     "DEFAULT_SCENE",
@@ -86,16 +91,6 @@ DEFAULT_SCENE = "bouncing_ellipse"
 TARGETS = ("c", "numpy")
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
-
-#: Commands of issue 5 that need what this version does not have, and what to use instead.
-UNAVAILABLE = {
-    "simulate": "there is no simulator yet; 'symmech derive SCENE --emit numpy' writes the"
-    " equations of motion and the impact maps as code to integrate with a solver of your own",
-    "bench": "run the benchmark scripts of a source checkout instead: python3"
-    " benchmarks/*.py (see benchmarks/README.md)",
-    "stress": "it stress-tests the simulator, which does not exist yet; 'symmech verify'"
-    " runs the textbook checks",
-}
 
 
 # ---------------------------------------------------------------------------------------
@@ -741,8 +736,7 @@ def _parser() -> argparse.ArgumentParser:
         prog="symmech",
         description="Symbolic geometric mechanics: derive a scene's equations and impact"
         " maps, and emit code.",
-        epilog="SCENE is a scene file (TOML) or a built-in scene name ('symmech examples')."
-        f" Not available in this version: {', '.join(UNAVAILABLE)}.",
+        epilog="SCENE is a scene file (TOML) or a built-in scene name ('symmech examples').",
     )
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an error")
@@ -784,6 +778,9 @@ def _parser() -> argparse.ArgumentParser:
     verify = sub.add_parser("verify", parents=[common], help="run the textbook checks")
     verify.add_argument("-k", dest="pattern", help="only checks whose name contains TEXT")
 
+    add_commands(sub, common)
+    add_sweep_command(sub, common)
+
     export = sub.add_parser("export", parents=[common], help="write a scene as a TOML file")
     export.add_argument("scene", nargs="?", default=DEFAULT_SCENE, help="scene file or name")
     export.add_argument("-o", "--output", help="file to write (default: standard output)")
@@ -811,6 +808,10 @@ def _run(args: argparse.Namespace, progress: _Progress) -> int:
         return EXIT_OK
     if command == "verify":
         return _verify(args.pattern, progress)
+    if command in COMMANDS:
+        return run_command(args, resolve_scene, progress)
+    if command == "sweep":
+        return run_sweep_command(args, resolve_scene, progress)
     spec = getattr(args, "scene", DEFAULT_SCENE)
     if command == "derive":
         targets = args.emit or ["c"]
@@ -871,16 +872,6 @@ def _escape_unencodable(streams: Sequence[object]) -> list[tuple[object, str]]:
     return changed
 
 
-def _unavailable(argv: Sequence[str]) -> str | None:
-    """The command of ``argv`` if it is one this version does not have (None otherwise)."""
-    for arg in argv:
-        if not arg.startswith("-"):
-            return arg if arg in UNAVAILABLE else None
-        if arg in ("-h", "--help", "--version"):
-            return None
-    return None
-
-
 def _is_applied(expr: sp.Expr) -> bool:
     from sympy.core.function import AppliedUndef
 
@@ -901,14 +892,6 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: list[str]) -> int:
-    command = _unavailable(argv)
-    if command is not None:
-        print(
-            f"symmech: error: '{command}' is not available in this version of symmech:"
-            f" {UNAVAILABLE[command]}",
-            file=sys.stderr,
-        )
-        return EXIT_INPUT
     parser = _parser()
     args = parser.parse_args(argv)
     if args.version:

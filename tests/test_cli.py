@@ -616,30 +616,3 @@ def test_show_says_what_it_leaves_out_and_full_prints_it(tmp_path: Path):
     assert latex.returncode == 0, latex.stderr
     note = "\\paragraph{Christoffel symbols}\nnot derived for n = 7 \\textgreater{} 6 coordinates"
     assert note in latex.stdout
-
-
-# ---------------------------------------------------------------------------------------
-# commands of issue 5 that this version does not have
-
-
-@pytest.mark.parametrize(
-    ("args", "instead"),
-    [
-        (("simulate", "car", "--t-end", "1", "--plot", "out.png"), "symmech derive SCENE"),
-        (("--quiet", "simulate"), "no simulator yet"),
-        (("bench",), "python3 benchmarks/*.py"),
-        (("stress", "--seed", "1"), "symmech verify"),
-    ],
-    ids=["simulate", "simulate quiet", "bench", "stress"],
-)
-def test_unavailable_command_says_so_in_one_line(tmp_path: Path, args: tuple, instead: str):
-    proc = symmech(*args, cwd=tmp_path)
-    command = next(a for a in args if not a.startswith("-"))
-    line = assert_one_line_error(
-        proc, f"'{command}' is not available in this version of symmech", instead
-    )
-    assert "invalid choice" not in line
-    assert proc.stdout == ""
-    assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
-    help_text = symmech("--help", cwd=tmp_path).stdout
-    assert "Not available in this version: simulate, bench, stress." in " ".join(help_text.split())

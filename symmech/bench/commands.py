@@ -23,11 +23,18 @@ import numpy as np
 from symmech.bench import stress as stress_cases
 from symmech.bench import work_precision as wp
 from symmech.bench.cases import CASES
+from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError
 
 __all__ = ["COMMANDS", "add_commands", "run_command"]
 
 COMMANDS = ("simulate", "bench", "stress")
+
+
+def _print(text: str) -> None:
+    """Print a line of output with every non-printable character escaped (scene and wall
+    names reach it)."""
+    print(terminal(text))
 
 
 def _floats(text: str, what: str) -> list[float]:
@@ -110,20 +117,20 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         contact=args.contact,
         max_events=args.max_events,
     )
-    print(f"status: {res.status}: {res.message}")
+    _print(f"status: {res.status}: {res.message}")
     if res.accumulation_time is not None:
-        print(f"accumulation time: {float(res.accumulation_time)!r}")
+        _print(f"accumulation time: {float(res.accumulation_time)!r}")
     for key, value in res.stats.items():
-        print(f"{key}: {value}")
-    print(f"events: {len(res.events)}")
+        _print(f"{key}: {value}")
+    _print(f"events: {len(res.events)}")
     for e in res.events[: args.events]:
-        print(f"  {e!r}")
+        _print(f"  {e!r}")
     if len(res.events) > args.events:
-        print(f"  ... {len(res.events) - args.events} more")
+        _print(f"  ... {len(res.events) - args.events} more")
     with np.printoptions(precision=17):
-        print(f"t = {float(res.t[-1])!r}")
-        print(f"q = {np.asarray(res.q[-1], dtype=float)}")
-        print(f"v = {np.asarray(res.v[-1], dtype=float)}")
+        _print(f"t = {float(res.t[-1])!r}")
+        _print(f"q = {np.asarray(res.q[-1], dtype=float)}")
+        _print(f"v = {np.asarray(res.v[-1], dtype=float)}")
     return 0 if res.success else 1
 
 
@@ -141,17 +148,17 @@ def _bench(args: argparse.Namespace, say: Callable) -> int:
         repeats=args.repeats,  # type: ignore[arg-type]
         baseline=not args.no_baseline,
     )
-    print(wp.format_table(case, ref, table))
+    _print(wp.format_table(case, ref, table))
     if args.plot:
         wp.plot(case, table, args.plot)
-        print(f"plot: {args.plot}")
+        _print(f"plot: {args.plot}")
     return 0
 
 
 def _stress(args: argparse.Namespace, say: Callable) -> int:
     say(f"stress cases on backend {args.backend}")
     results = stress_cases.run_all(args.backend, args.cases)
-    print(stress_cases.format_table(results))
+    _print(stress_cases.format_table(results))
     return 0 if all(r.passed for r in results) else 1
 
 

@@ -223,7 +223,10 @@ class ScipyFlow:
             raise FlowFailure(f"scipy {self.cls.__name__}: {message}")
         self.stats.steps += 1
         self._collect()
-        self.h = s.step_size if s.step_size else self.h
+        # the solver's proposal for its next step (h_abs of SciPy's RK, Radau and BDF
+        # solvers), so a restart after a projection keeps growing the step
+        # (LSODA exposes none: twice its last step, which it cuts back if need be)
+        self.h = getattr(s, "h_abs", None) or 2 * s.step_size or self.h
         dense = s.dense_output()
         return Segment(t0, float(s.t), y0, s.y.copy(), None, lambda tt, _d=dense: _d(tt))
 
@@ -233,9 +236,17 @@ class ScipyFlow:
             self.h = h
 
     def accept_projection(self, y: np.ndarray) -> None:
-        """The loop replaced the end state: restart the solver there."""
-        if self.solver.t < self.t_bound:
-            self.start(float(self.solver.t), y, self.t_bound)
+        """The loop replaced the end state: restart the solver there, unless the change is
+        within the tolerance (a restart costs SciPy's multistep methods their order and
+        step size, so BDF and LSODA would crawl if restarted after every projection; the
+        drift is then corrected at the first projection that matters)."""
+        if self.solver.t >= self.t_bound:
+            return
+        y = np.asarray(y, dtype=float)
+        scale = self.atol + self.rtol * np.abs(y)
+        if np.max(np.abs(y - self.solver.y) / scale) < 1:
+            return
+        self.start(float(self.solver.t), y, self.t_bound)
 
 
 class AugmentedFlow:

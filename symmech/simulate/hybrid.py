@@ -22,7 +22,9 @@ velocity tolerance ``tol_v = atol + rtol |v|_inf``:
   (so a slow approach never tunnels).  Otherwise it is a **grazing** touch: reported, no
   impact map, and the free flow, which leads away from the wall, continues.
 * **Accumulation (Zeno)**: after an impact whose rebound rate is below ``zeno_factor tol_v``
-  while the wall would have to push (lambda_N > 0), the impacts accumulate.  The
+  (or so slow that its bounce would not rise above the position resolution, see
+  :meth:`_Run.zeno_speed`) while the wall would have to push (lambda_N > 0), the impacts
+  accumulate.  The
   accumulation time is estimated from the geometric decay of the last flight times,
   ``t* = t_k + dt_k rho / (1 - rho)`` with ``rho = dt_k / dt_(k-1)`` (exact for the bouncing
   ball).  With ``contact="stop"`` the run ends there with status ``"zeno"``; with
@@ -115,6 +117,9 @@ class _Run:
         self.drift = 0.0
         self.tol_psi = 10 * opts.atol
         self.condition = 1.0
+        #: walls grazed and not yet left (psi < 0 at every accepted step end since): a
+        #: start inside such a wall is not an event again
+        self.grazing: set[int] = set()
 
     @property
     def mode(self) -> int | None:
@@ -176,6 +181,17 @@ class _Run:
         v = self.f.project(wall, self.t, q, self.v(y))
         return self.f.normal_force(wall, self.t, q, v)
 
+    def zeno_speed(self, wall: int, y: np.ndarray) -> Any:
+        """The rebound speed below which impacts accumulate: ``zeno_factor tol_v``, or the
+        speed whose bounce ``r^2 / (2 |psi''|)`` does not rise above the position
+        resolution ``max(atol, 16 eps |q|_inf)``: a bounce lower than the absolute
+        tolerance is rest, and one lower than the arithmetic's resolution of q cannot be
+        resolved at all (its events would stall, not decay)."""
+        acc = abs(self._free_psi_acceleration(wall, y))
+        q_max = max((abs(x) for x in self.q(y)), default=0)
+        resolution = max(self.o.atol, 16 * self.f.eps * q_max)
+        return max(self.o.zeno_factor * self.tol_v(y), (2 * acc * resolution) ** 0.5)
+
     def _free_psi_acceleration(self, wall: int, y: np.ndarray) -> float:
         h = 1e-6 * max(1.0, abs(self.t))
         ydot = self.f.rhs(None, self.t, y)
@@ -197,13 +213,29 @@ class _Run:
             return None
 
         t0 = seg.t0
-        # a wall touched at the start of the step (just left, or released): psi(t0) ~ 0 is
-        # a root of psi itself, so search the divided gap psi(t)/(t - t0) instead, whose
-        # value at t0 is the normal rate d psi/dt (positive when leaving)
-        divided = [
-            what == "wall" and abs(self.f.psi(w, t0, self.q(seg.y0))) <= self.tol_psi
-            for w, what in funcs
-        ]
+        # A wall touched at the start of the step and left (psi(t0) ~ 0, d psi/dt > 0):
+        # psi(t0) is a root of psi itself, so search the divided gap psi(t)/(t - t0),
+        # whose value at t0 is the normal rate.  A wall touched and approached is searched
+        # through psi itself.  A start inside a wall (psi(t0) < 0, unless the body grazed
+        # it and has not left it since) counts as psi(t0) = 0: a further dip is an event
+        # at once, never a tunnel.
+        divided, start = [], []
+        for w, what in funcs:
+            if what != "wall":
+                divided.append(False)
+                start.append(None)
+                continue
+            psi0 = self.f.psi(w, t0, self.q(seg.y0))
+            rate0 = self.f.normal_rate(w, t0, seg.y0) if abs(psi0) <= self.tol_psi else None
+            divided.append(rate0 is not None and rate0 > 0 and w not in self.grazing)
+            if w in self.grazing:  # grazed, not left since: counts as inside until it leaves
+                start.append(0 * psi0 - 1)
+            elif divided[-1]:
+                start.append(rate0)
+            elif psi0 < 0:
+                start.append(0 * psi0)
+            else:
+                start.append(psi0)
 
         def value(i: int, t: float, y: np.ndarray) -> float:
             w, what = funcs[i]
@@ -213,9 +245,7 @@ class _Run:
             return psi / (t - t0) if divided[i] else psi
 
         def start_value(i: int) -> float:
-            if divided[i]:
-                return self.f.normal_rate(funcs[i][0], t0, seg.y0)
-            return value(i, t0, seg.y0)
+            return value(i, t0, seg.y0) if start[i] is None else start[i]
 
         self._event_values = [(lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))]
 
@@ -306,6 +336,7 @@ class _Run:
         y = self.y
         rate = self.f.normal_rate(wall, self.t, y)
         tol_v = self.tol_v(y)
+        self.grazing.discard(wall)
         if rate >= -tol_v:
             # reached tangentially: a resting contact if the wall must (or may) hold the
             # body while it still creeps in (lambda_N >= 0), else a grazing touch
@@ -314,6 +345,7 @@ class _Run:
                 self.enter_contact(wall, rate, reason="grazing contact with the wall pressing")
             else:
                 self.event("grazing", wall, y, y, rate)
+                self.grazing.add(wall)
             return
         self.impacts(wall, rate)
 
@@ -371,7 +403,7 @@ class _Run:
     def check_accumulation(self, wall: int) -> None:
         y = self.y
         rebound = self.f.normal_rate(wall, self.t, y)
-        if rebound > self.o.zeno_factor * self.tol_v(y) or not self.needs_push(wall, y):
+        if rebound > self.zeno_speed(wall, y) or not self.needs_push(wall, y):
             return
         times = self.history[wall]
         estimate = self.t
@@ -468,6 +500,8 @@ class _Run:
                     self.segments.append((seg.t0, seg.t1, seg.dense))
                     self.t, self.y = seg.t1, y1
                     self.record(self.t, self.y)
+                    for w in [w for w in self.grazing if self.f.psi(w, self.t, self.q(y1)) >= 0]:
+                        self.grazing.discard(w)
                     self.track_energy()
                     continue
                 t_e, y_e, wall, what = ev

@@ -20,6 +20,7 @@
  * No allocation per step: the work arrays are allocated once per run (sim_new, sim_batch).
  * Methods: dop853, tsit5, rk45, rk4 (indices in this order).
  */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -105,6 +106,8 @@ typedef struct {
     double hist[NW > 0 ? NW : 1][3];
     long nhist[NW > 0 ? NW : 1];
     double energy0, energy_jumps, energy_drift, drift, tol_psi, condition;
+    /* walls grazed and not yet left (hybrid._Run.grazing) */
+    int grazing[NW > 0 ? NW : 1];
     long steps, rejected, nfev, events, counts[4];
     /* stop */
     int status, reason, stop_wall, why, sub, failed_function;
@@ -691,7 +694,7 @@ static double dip(const double *ts, const double *gs)
 
 typedef struct {
     int nf, wall[NF], release[NF], divided[NF];
-    double t0;
+    double t0, start[NF];
 } funcs_t;
 
 static const double *state_at(sim_t *s, double t, double *buf)
@@ -781,13 +784,22 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
         if (w == s->mode) continue;
         F.wall[F.nf] = w;
         F.release[F.nf] = 0;
-        F.divided[F.nf] = fabs(psi(s, w, F.t0, s->y0s)) <= s->tol_psi;
+        /* hybrid._Run.detect: divided gap for a wall touched and left at the start, psi
+           itself when touched and approached, psi(t0) counted as 0 inside a wall */
+        double psi0 = psi(s, w, F.t0, s->y0s);
+        double rate0 = fabs(psi0) <= s->tol_psi ? normal_rate(s, w, F.t0, s->y0s) : 0.0;
+        F.divided[F.nf] = fabs(psi0) <= s->tol_psi && rate0 > 0 && !s->grazing[w];
+        if (s->grazing[w]) F.start[F.nf] = -1.0; /* grazed, not left since: inside */
+        else if (F.divided[F.nf]) F.start[F.nf] = rate0;
+        else if (psi0 < 0) F.start[F.nf] = 0.0 * psi0;
+        else F.start[F.nf] = psi0;
         F.nf++;
     }
     if (s->mode >= 0) {
         F.wall[F.nf] = s->mode;
         F.release[F.nf] = 1;
         F.divided[F.nf] = 0;
+        F.start[F.nf] = normal_force(s, s->mode, F.t0, s->y0s, s->y0s + NQ);
         F.nf++;
     }
     if (F.nf == 0) return 0;
@@ -795,9 +807,7 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
     double times[3] = { 0.0, 0.0, 0.0 };
     double *vals = s->vals; /* three rows of NF: samples k-2, k-1, k */
     times[2] = F.t0;
-    for (int i = 0; i < F.nf; ++i)
-        vals[2 * NF + i] = F.divided[i] ? normal_rate(s, F.wall[i], F.t0, s->y0s)
-                                        : fvalue(s, &F, i, F.t0, s->y0s);
+    for (int i = 0; i < F.nf; ++i) vals[2 * NF + i] = F.start[i];
     for (int k = 1; k <= K; ++k) {
         double tk = k < K ? F.t0 + (s->st1 - F.t0) * (double)k / (double)K : s->st1;
         times[0] = times[1];
@@ -901,10 +911,21 @@ static int enter_contact(sim_t *s, int w, double r, int why_here, double estimat
     return 0;
 }
 
+/* the rebound speed below which impacts accumulate (hybrid._Run.zeno_speed) */
+static double zeno_speed(sim_t *s, int w, const double *y)
+{
+    double acc = fabs(free_psi_acceleration(s, w, y)), q_max = 0.0;
+    for (int i = 0; i < NQ; ++i) q_max = fabs(y[i]) > q_max ? fabs(y[i]) : q_max;
+    double res = 16 * DBL_EPSILON * q_max;
+    res = s->atol > res ? s->atol : res;
+    double by_tol = s->zeno_factor * tol_v(s, y), by_res = sqrt(2 * acc * res);
+    return by_tol > by_res ? by_tol : by_res;
+}
+
 static int check_accumulation(sim_t *s, int w)
 {
     double rebound = normal_rate(s, w, s->t, s->y);
-    if (rebound > s->zeno_factor * tol_v(s, s->y) || !needs_push(s, w, s->y)) return 0;
+    if (rebound > zeno_speed(s, w, s->y) || !needs_push(s, w, s->y)) return 0;
     double estimate = s->t;
     if (s->nhist[w] >= 3) {
         double d1 = s->hist[w][2] - s->hist[w][1], d0 = s->hist[w][1] - s->hist[w][0];
@@ -970,12 +991,15 @@ static int impacts(sim_t *s, int first, double r)
 static int at_wall(sim_t *s, int w)
 {
     double r = normal_rate(s, w, s->t, s->y);
+    s->grazing[w] = 0;
     if (r >= -tol_v(s, s->y)) {
         /* reached tangentially: a resting contact if the wall must (or may) hold the body
            while it still creeps in (lambda_N >= 0), else a grazing touch */
         double force = push_force(s, w, s->y);
         if (force > 0 || (r < 0 && force >= 0)) return enter_contact(s, w, r, 0, s->t);
-        return event(s, K_GRAZING, w, s->y, s->y, r);
+        if (event(s, K_GRAZING, w, s->y, s->y, r)) return 1;
+        s->grazing[w] = 1;
+        return 0;
     }
     return impacts(s, w, r);
 }
@@ -1040,6 +1064,8 @@ static int run(sim_t *s)
             s->t = s->st1;
             memcpy(s->y, y1, sizeof y1);
             record(s);
+            for (int w = 0; w < NW; ++w)
+                if (s->grazing[w] && psi(s, w, s->t, s->y) >= 0) s->grazing[w] = 0;
             track_energy(s);
             if (s->status != ST_RUNNING) return 0;
             continue;
@@ -1134,6 +1160,7 @@ void symmech_bouncing_ball_sim_begin(void *p, double t0, const double *y0)
     s->condition = 1.0;
     s->steps = s->rejected = s->nfev = s->events = 0;
     s->tol_psi = 10 * s->atol;
+    for (int w = 0; w < NW; ++w) s->grazing[w] = 0;
     s->nrec = s->nseg = s->nev = 0;
     s->energy0 = energy(s, t0, s->y, s->y + NQ);
 }

@@ -1,0 +1,142 @@
+"""``symmech simulate``, ``symmech bench`` and ``symmech stress`` from the command line."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+from test_cli import assert_one_line_error, symmech
+
+
+def test_simulate_a_builtin_case_prints_status_events_and_final_state(tmp_path: Path):
+    proc = symmech("simulate", "bouncing_ball", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "status: finished: reached t_end = 1.3" in proc.stdout
+    times = [float(t) for t in re.findall(r"impact at t=([0-9.e-]+)", proc.stdout)]
+    exact = [math.sqrt(2 / 9.81) * (1 + 2 * sum(0.5**j for j in range(1, k + 1))) for k in range(5)]
+    assert len(times) == 5
+    assert max(abs(a - b) for a, b in zip(times, exact, strict=True)) < 1e-12
+
+
+def test_simulate_stops_at_the_accumulation_with_contact_stop(tmp_path: Path):
+    proc = symmech(
+        "simulate",
+        "bouncing_ball",
+        "--t-end",
+        "3",
+        "--contact",
+        "stop",
+        "--backend",
+        "scipy",
+        "--quiet",
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "status: zeno" in proc.stdout
+    (t_star,) = re.findall(r"accumulation time: ([0-9.e-]+)", proc.stdout)
+    assert abs(float(t_star) - math.sqrt(2 / 9.81) * 3) < 1e-9
+
+
+def test_simulate_a_scene_file_with_state_and_parameters(tmp_path: Path):
+    scene = tmp_path / "drop.toml"
+    scene.write_text(
+        'coordinates = ["y"]\nmetric = ["m"]\npotential = "m*g*y"\n'
+        "[parameters]\nm = 1\ng = 9.81\n"
+        '[[walls]]\npsi = "y"\nrestitution = 1\n',
+        encoding="utf-8",
+    )
+    proc = symmech(
+        "simulate",
+        str(scene),
+        "--q0",
+        "2",
+        "--v0",
+        "0",
+        "--t-end",
+        "0.5",
+        "--param",
+        "g=2",
+        "--backend",
+        "numpy",
+        "--quiet",
+        cwd=tmp_path,
+    )
+    assert proc.returncode == 0, proc.stderr
+    (q,) = re.findall(r"q = \[([^\]]+)\]", proc.stdout)
+    assert abs(float(q) - (2 - 2 * 0.5**2 / 2)) < 1e-14
+
+
+def test_simulate_without_a_state_for_a_scene_without_a_case_is_refused(tmp_path: Path):
+    proc = symmech("simulate", "car", cwd=tmp_path)
+    assert_one_line_error(proc, "give --q0, --v0 and --t-end")
+
+
+def test_simulate_bad_state_is_a_one_line_error(tmp_path: Path):
+    proc = symmech("simulate", "bouncing_ball", "--q0", "-1", cwd=tmp_path)
+    assert_one_line_error(proc, "wrong side of wall 'floor'")
+
+
+def test_stress_runs_a_case_and_reports_pass(tmp_path: Path):
+    proc = symmech("stress", "-k", "cradle", "--backend", "scipy", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "| Newton's cradle | 5 balls, zero gaps |" in proc.stdout
+    assert "| pass |" in proc.stdout and "FAIL" not in proc.stdout
+
+
+def test_bench_prints_the_table_and_writes_the_plot(tmp_path: Path):
+    plot = tmp_path / "wp.png"
+    proc = symmech(
+        "bench",
+        "bouncing_ball",
+        "--routes",
+        "scipy:DOP853",
+        "--tolerances",
+        "1e-4,1e-8",
+        "--repeats",
+        "1",
+        "--plot",
+        str(plot),
+        "--quiet",
+        cwd=tmp_path,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    rows = [line for line in proc.stdout.splitlines() if line.startswith("| scipy | DOP853")]
+    assert len(rows) == 2
+    baseline = [line for line in proc.stdout.splitlines() if line.startswith("| baseline")]
+    assert len(baseline) == 2
+    assert plot.is_file() and plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_sweep_from_the_command_line_writes_the_table(tmp_path: Path):
+    grid = tmp_path / "grid.csv"
+    grid.write_text("alpha,y0\n0.25,1.0\n0.5,1.0\n0.5,2.0\n", encoding="utf-8")
+    out = tmp_path / "table.csv"
+    proc = symmech(
+        "sweep",
+        "bouncing_ball",
+        "--grid",
+        str(grid),
+        "--out",
+        str(out),
+        "--t-end",
+        "10",
+        "--v0",
+        "0",
+        "--contact",
+        "stop",
+        "--no-progress",
+        "--quiet",
+        cwd=tmp_path,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    import csv
+
+    rows = list(csv.DictReader(out.open(encoding="utf-8")))
+    assert [r["status"] for r in rows] == ["zeno"] * 3
+    for r in rows:
+        a, h = float(r["alpha"]), float(r["y0"])
+        exact = math.sqrt(2 * h / 9.81) * (1 + a) / (1 - a)
+        assert abs(float(r["time_to_rest"]) - exact) < 1e-9 * exact
