@@ -97,7 +97,10 @@ def test_bouncing_ball_persistent_rests_on_the_floor():
     assert b.status == "finished" and b.message == "reached t_end = 3.0"
     assert b.stats["contacts"] == 1 and b.events[-1].kind == "contact"
     t_star = math.sqrt(2 / 9.81) * 3
-    assert b.events[-1].time == pytest.approx(t_star, abs=1e-7)
+    # contact from the first impact whose bounce would not rise above atol (rebound
+    # r <= sqrt(2 g atol)); the remaining flights last at most 2 r / (g (1 - alpha))
+    r = math.sqrt(2 * 9.81 * 1e-10)
+    assert t_star - 2 * r / (9.81 * 0.5) <= b.events[-1].time <= t_star
     assert b.q[-1, 0] == 0.0 and b.v[-1, 0] == 0.0  # locked contact: the body rests
     # the step sequences agree up to roundoff: on a parabola the error estimate is pure
     # roundoff, and a factor of 10 against 9.2 after an estimate of 1e-9 changes the count
@@ -351,7 +354,7 @@ def test_batch_equals_looping_simulate_bit_for_bit_and_threads_do_not_matter():
     N = 12
     Q0 = np.column_stack([rng.uniform(-1, 1, N), rng.uniform(1, 2, N), rng.uniform(0, 3, N)])
     V0 = rng.uniform(-2, 2, (N, 3))
-    kw = {"params": ELLIPSE, "rtol": 1e-7, "atol": 1e-9, "max_events": 58}
+    kw = {"params": ELLIPSE, "rtol": 1e-7, "atol": 1e-9, "max_events": 47}
     scene = ellipse_gravity()
     one = simulate_batch(scene, Q0, V0, 5.0, threads=1, **kw)
     two = simulate_batch(scene, Q0, V0, 5.0, threads=2, **kw)

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import ctypes
 import time as _time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -467,6 +468,20 @@ class _Dense:
         )
 
 
+class _Segments(Sequence):
+    """The steps' continuous outputs, built on first access (most runs never ask)."""
+
+    def __init__(self, rows: np.ndarray, size: int):
+        self.rows, self.size = rows, size
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __getitem__(self, k: int) -> tuple[float, float, _Dense]:  # type: ignore[override]
+        r = self.rows[k]
+        return float(r[0]), float(r[1]), _Dense(r, self.size)
+
+
 def run_c(
     system: HybridSystem,
     values: dict[str, float],
@@ -542,7 +557,7 @@ def run_c(
         )
         for row, ids in zip(ev_all, evi_all, strict=True)
     ]
-    segments = [(float(r[0]), float(r[1]), _Dense(r, ny)) for part in segs for r in part]
+    segments = _Segments(np.concatenate(segs) if segs else np.zeros((0, 0)), ny)
     stats = {
         "steps": int(info[11]),
         "rejected_steps": int(info[12]),

@@ -77,7 +77,7 @@ class SimulationResult:
     accumulation_time: float | None = None
 
     def __post_init__(self) -> None:
-        self._starts = np.array([s[0] for s in self.segments], dtype=float)
+        self._starts: np.ndarray | None = None
 
     @property
     def y(self) -> np.ndarray:
@@ -102,6 +102,8 @@ class SimulationResult:
         lo, hi = self.segments[0][0], self.segments[-1][1]
         if np.any(ts < lo) or np.any(ts > hi):
             raise ValueError(f"t outside the simulated interval [{lo!r}, {hi!r}]")
+        if self._starts is None:
+            self._starts = np.array([float(s[0]) for s in self.segments], dtype=float)
         flat = np.atleast_1d(ts)
         out = np.empty((flat.size, 2 * self.n))
         for i, ti in enumerate(flat):

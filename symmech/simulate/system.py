@@ -196,6 +196,8 @@ class HybridSystem:
     #: the modules carry the Jacobian d(rhs)/dy (for implicit integrators)
     jacobian: bool = False
     _locked: dict[tuple[str, int], Any] = field(default_factory=dict, repr=False)
+    _moving: tuple[bool, ...] | None = field(default=None, repr=False)
+    _conserved: bool | None = field(default=None, repr=False)
 
     @classmethod
     def build(
@@ -241,6 +243,20 @@ class HybridSystem:
     @property
     def free(self) -> SceneModule:
         return self.modules[None]
+
+    @property
+    def moving(self) -> tuple[bool, ...]:
+        """Per wall: psi depends on t (no contact mode)."""
+        if self._moving is None:
+            self._moving = tuple(TIME in w.psi.free_symbols for w in self.scene.walls)
+        return self._moving
+
+    @property
+    def energy_conserved(self) -> bool:
+        """The flow conserves T + V: the potential does not depend on t."""
+        if self._conserved is None:
+            self._conserved = TIME not in sp.sympify(self.scene.potential).free_symbols
+        return self._conserved
 
     def has_contact_mode(self, wall: int) -> bool:
         """Whether ``wall`` is static (a moving wall has no contact mode)."""
@@ -293,11 +309,11 @@ class Functions:
         self.n = system.n
         self.walls = len(system.scene.walls)
         self.constrained = system.scene.is_constrained
-        self.moving = tuple(not system.has_contact_mode(w) for w in range(self.walls))
+        self.moving = system.moving
         self.wall_names = tuple(w.name for w in system.scene.walls)
         #: The flow conserves T + V: the potential does not depend on t (ideal constraints
         #: and contact constraints do no work).
-        self.energy_conserved = TIME not in sp.sympify(system.scene.potential).free_symbols
+        self.energy_conserved = system.energy_conserved
         self._params = dict(params)
         free = system.free
         if free.inputs:
