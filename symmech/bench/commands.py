@@ -14,7 +14,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Callable
 from typing import Any
 
@@ -25,6 +24,7 @@ from symmech.bench import work_precision as wp
 from symmech.bench.cases import CASES
 from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError
+from symmech.simulate.checks import numbers
 
 __all__ = ["COMMANDS", "add_commands", "run_command"]
 
@@ -35,16 +35,6 @@ def _print(text: str) -> None:
     """Print a line of output with every non-printable character escaped (scene and wall
     names reach it)."""
     print(terminal(text))
-
-
-def _floats(text: str, what: str) -> list[float]:
-    try:
-        values = [float(x) for x in text.replace(",", " ").split()]
-    except ValueError:
-        raise SymmechError(f"{what}: expected numbers separated by commas, got {text!r}") from None
-    if not all(math.isfinite(x) for x in values):
-        raise SymmechError(f"{what}: every value must be finite, got {text!r}")
-    return values
 
 
 def add_commands(sub: Any, common: argparse.ArgumentParser) -> None:
@@ -89,8 +79,8 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
     scene = sf.scene
     params = {str(k): float(v) for k, v in sf.defaults.items()}
     case = CASES.get(scene.name)
-    q0 = _floats(args.q0, "--q0") if args.q0 else (list(case.q0) if case else None)
-    v0 = _floats(args.v0, "--v0") if args.v0 else (list(case.v0) if case else None)
+    q0 = numbers(args.q0, "--q0") if args.q0 else (list(case.q0) if case else None)
+    v0 = numbers(args.v0, "--v0") if args.v0 else (list(case.v0) if case else None)
     t_end = args.t_end if args.t_end is not None else (case.t_end if case else None)
     if q0 is None or v0 is None or t_end is None:
         raise SymmechError(
@@ -102,7 +92,7 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         name, sep, value = item.partition("=")
         if not sep:
             raise SymmechError(f"--param: expected NAME=VALUE, got {item!r}")
-        params[name.strip()] = _floats(value, f"--param {name}")[0]
+        params[name.strip()] = numbers(value, f"--param {name}")[0]
     say(f"simulating {scene.name} to t = {t_end} ({args.backend}, {args.method})")
     res = simulate_pkg.simulate(
         scene,
@@ -139,7 +129,7 @@ def _bench(args: argparse.Namespace, say: Callable) -> int:
     routes = [tuple(r.split(":", 1)) for r in args.routes.split(",") if r]
     if any(len(r) != 2 for r in routes):
         raise SymmechError(f"--routes: expected backend:method pairs, got {args.routes!r}")
-    tolerances = _floats(args.tolerances, "--tolerances")
+    tolerances = numbers(args.tolerances, "--tolerances")
     say(f"reference for {case.scene_name}")
     ref, table = wp.rows(
         case,

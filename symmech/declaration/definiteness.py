@@ -224,8 +224,8 @@ def _exact_sign(entry: sp.Expr, coordinate: sp.Symbol) -> tuple[str, sp.Rational
         return None
     try:
         roots = sorted({sp.Rational(str(r.evalf(30))) for r in sp.real_roots(poly)})
-    except (NotImplementedError, sp.PolynomialError):
-        return None
+    except (NotImplementedError, sp.PolynomialError):  # roots sympy cannot isolate:
+        return None  # the sign stays undecided here, and the caller tries its other routes
     lo = 0 if coordinate.is_nonnegative else -math.inf
     roots = [r for r in roots if r >= lo]
     if roots:

@@ -18,7 +18,7 @@ import numpy as np
 
 from symmech.simulate.system import SimulationError
 
-__all__ = ["CONTACT_MODES", "RunOptions", "check_run", "positive", "states"]
+__all__ = ["CONTACT_MODES", "RunOptions", "check_run", "numbers", "positive", "states"]
 
 #: What to do at an accumulation of impacts.
 CONTACT_MODES = ("persistent", "stop")
@@ -124,3 +124,17 @@ def check_run(
         event_samples=_count(event_samples, "event_samples"),
         contact=contact,
     )
+
+
+def numbers(text: str, what: str) -> list[float]:
+    """A command-line list of finite numbers (``"0, 1.5,0.3"``), or a SimulationError
+    naming the option ``what``."""
+    try:
+        values = [float(x) for x in text.replace(",", " ").split()]
+    except ValueError:
+        raise SimulationError(
+            f"{what}: expected numbers separated by commas, got {text!r}"
+        ) from None
+    if not values or not all(math.isfinite(x) for x in values):
+        raise SimulationError(f"{what}: expected finite numbers, got {text!r}")
+    return values

@@ -15,7 +15,6 @@
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import tempfile
 from collections.abc import Callable
@@ -23,19 +22,10 @@ from pathlib import Path
 from typing import Any
 
 from symmech.errors import SymmechError
+from symmech.simulate.checks import numbers
 from symmech.simulate.result import STATUSES
 
 __all__ = ["add_command", "run_command"]
-
-
-def _floats(text: str, what: str) -> list[float]:
-    try:
-        values = [float(x) for x in text.replace(",", " ").split()]
-    except ValueError:
-        raise SymmechError(f"{what}: expected numbers separated by commas, got {text!r}") from None
-    if not values or not all(math.isfinite(x) for x in values):
-        raise SymmechError(f"{what}: expected finite numbers, got {text!r}")
-    return values
 
 
 def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
@@ -109,10 +99,10 @@ def run_command(
         name, sep, value = item.partition("=")
         if not sep:
             raise SymmechError(f"--param: expected NAME=VALUE, got {item!r}")
-        params[name.strip()] = _floats(value, f"--param {name}")[0]
+        params[name.strip()] = numbers(value, f"--param {name}")[0]
     grid = _read_grid(args.grid)  # a grid column overrides the file's default
-    q0 = _floats(args.q0, "--q0") if args.q0 else None
-    v0 = _floats(args.v0, "--v0") if args.v0 else None
+    q0 = numbers(args.q0, "--q0") if args.q0 else None
+    v0 = numbers(args.v0, "--v0") if args.v0 else None
     outputs = tuple(o.strip() for o in args.outputs.split(",") if o.strip())
     client = None
     if args.scheduler:
