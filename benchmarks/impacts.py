@@ -15,7 +15,7 @@ A second table (issue 13) times the closed-form impact maps of two larger system
 by hand (tests/scale_support.py): the 3-link pendulum on a cart with a wall at its tip and
 a Chaplygin ball (5 quasi-velocities, dense trigonometric inertia) hitting a wall it rolls
 on.  For each: ``codegen.generate(..., strategy="closed_form")``, which the structural
-budget (symmech.budget.CLOSED_FORM_TERMS) refuses at once, the time to that refusal;
+budget (symmech.algebra.budget.CLOSED_FORM_TERMS) refuses at once, the time to that refusal;
 ``strategy="auto"`` end to end (it falls back to linear_solve); and, as the baseline in
 the same run, the unbudgeted ``scene.impact_map(0)`` (``--no-baseline`` skips it: 15 to
 30 s each).

@@ -1,4 +1,4 @@
-"""Budgets of the symbolic stages (symmech.budget) and how code generation uses them.
+"""Budgets of the symbolic stages (symmech.algebra.budget) and how code generation uses them.
 
 The bounds are checked against sympy's own expansion and determinant (independent
 routes: ``Poly(expand(e))``, ``Matrix.det`` expanded, a brute-force permanent); the time
@@ -23,8 +23,9 @@ import sympy as sp
 from scale_support import DENSE_TRIG_3, POWER_64, cart_with_tip_wall, chaplygin_ball_wall
 
 import symmech as sm
-from symmech import budget, codegen
-from symmech.budget import BudgetExceeded
+from symmech import codegen
+from symmech.algebra import budget
+from symmech.algebra.budget import BudgetExceeded
 from symmech.codegen.plan import CodegenError
 from symmech.examples import bouncing_ellipse, carnot_3_7, pendulum_on_cart
 from symmech.geometry.field import RationalField

@@ -20,8 +20,8 @@ import pytest
 import sympy as sp
 
 import symmech as sm
-from symmech import budget
-from symmech.budget import BudgetExceeded
+from symmech.algebra import budget
+from symmech.algebra.budget import BudgetExceeded
 from symmech.examples import car, pendulum_on_cart
 from symmech.geometry.adjugate import adjugate_det
 from symmech.geometry.field import RationalField, field_solve

@@ -23,7 +23,8 @@ import sympy as sp
 from test_impacts_support import kkt_at
 
 import symmech as sm
-from symmech import budget, examples
+from symmech import examples
+from symmech.algebra import budget
 from symmech.impacts import carnot, derive_impact_map
 from symmech.impacts.identity import DegreeBound, Unsupported, identically_zero
 

@@ -20,21 +20,32 @@ PKG = ROOT / "symmech"
 # codegen -> simulate -> sweep -> verify/bench -> cli
 LAYERS = [
     "errors",
-    "budget",
+    "algebra",
     "declaration",
     "geometry",
     "constraints",
     "impacts",
     "scene",
+    "mechanics",
     "examples",
     "scenefile",
     "codegen",
     "simulate",
     "sweep",
+    "references",
     "verify",
+    "derivation",
     "bench",
     "cli",
 ]
+# not layers: the package's entry points
+ENTRY_POINTS = {"__init__", "__main__"}
+
+
+def test_every_module_has_a_layer():
+    names = {p.stem for p in PKG.glob("*.py")} | {p.parent.name for p in PKG.glob("*/__init__.py")}
+    unplaced = sorted(names - set(LAYERS) - ENTRY_POINTS - {"scenes"})
+    assert not unplaced, f"modules not in LAYERS (place them in the layer order): {unplaced}"
 
 
 def _layer_of(module: str) -> int | None:

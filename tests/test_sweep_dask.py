@@ -73,7 +73,7 @@ def test_a_task_that_raises_on_a_worker_is_failed_rows(client, monkeypatch):
     reports failed rows naming the error; the sweep returns."""
     from dataclasses import replace
 
-    from symmech.sweep import api
+    from symmech.sweep import driver as api
 
     real = runner.run_dask
 

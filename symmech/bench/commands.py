@@ -24,7 +24,7 @@ from symmech.bench import work_precision as wp
 from symmech.bench.cases import CASES
 from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError
-from symmech.simulate.checks import numbers
+from symmech.simulate.arguments import numbers
 
 __all__ = ["COMMANDS", "add_commands", "run_command"]
 

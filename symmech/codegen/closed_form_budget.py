@@ -6,19 +6,19 @@ structure of the scene: an exact inverse or solve of the metric, and the project
 an impact (Carnot paper section 2.2 and eq. 10: adjugates of ``g`` and of the bordered
 matrices ``[[g, mu^T], [mu, 0]]`` and ``[[g, A^T], [A, 0]]`` with ``A = [mu; dpsi; nu]``),
 have at most as many terms as the Leibniz expansion of the determinants of their
-connected blocks, bounded by :func:`symmech.budget.determinant_terms`.  A diagonal metric
+connected blocks, bounded by :func:`symmech.algebra.budget.determinant_terms`.  A diagonal metric
 has blocks of size one at any n; a wall touching few coordinates borders a small block.
 
-:func:`closed_form_cost` raises :class:`~symmech.budget.BudgetExceeded` before anything
+:func:`closed_form_cost` raises :class:`~symmech.algebra.budget.BudgetExceeded` before anything
 is derived when
 
-* that bound exceeds :data:`symmech.budget.CLOSED_FORM_TERMS` for g, for the metric
+* that bound exceeds :data:`symmech.algebra.budget.CLOSED_FORM_TERMS` for g, for the metric
   bordered by the constraints, or for the metric bordered by the one-forms of a wall;
 * an entry of the potential's gradient expands to more than
-  :data:`symmech.budget.FIELD_TERMS` terms (the exact solve would expand it in full).
+  :data:`symmech.algebra.budget.FIELD_TERMS` terms (the exact solve would expand it in full).
 
-The derivation itself then runs under :func:`symmech.budget.time_limit`
-(:data:`symmech.budget.CLOSED_FORM_SECONDS`), see :func:`symmech.codegen.plan.build_plan`.
+The derivation itself then runs under :func:`symmech.algebra.budget.time_limit`
+(:data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`), see :func:`symmech.codegen.plan.build_plan`.
 """
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ from typing import TYPE_CHECKING
 
 import sympy as sp
 
-from symmech import budget as limits
-from symmech.budget import BudgetExceeded
+from symmech.algebra import budget as limits
+from symmech.algebra.budget import BudgetExceeded
 
 if TYPE_CHECKING:
     from symmech.scene import Scene
@@ -46,7 +46,7 @@ def _bordered(g: sp.Matrix, A: sp.Matrix) -> sp.Matrix:
 
 def closed_form_cost(scene: Scene, walls: bool = True) -> int:
     """The structural bound (terms) of the scene's closed forms; raises
-    :class:`~symmech.budget.BudgetExceeded` naming the stage when it is over budget
+    :class:`~symmech.algebra.budget.BudgetExceeded` naming the stage when it is over budget
     (module docstring).  ``walls=False`` leaves the impact maps out."""
     g = sp.Matrix(scene.mass_matrix())
     mu = sp.Matrix(scene.constraint_matrix)

@@ -44,8 +44,8 @@ from typing import TYPE_CHECKING
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from symmech import budget as limits
-from symmech.budget import BudgetExceeded
+from symmech.algebra import budget as limits
+from symmech.algebra.budget import BudgetExceeded
 from symmech.codegen.closed_form_budget import closed_form_cost
 from symmech.codegen.printers import identifier
 from symmech.declaration.symbols import t as TIME
@@ -323,12 +323,12 @@ def build_plan(
     solves the linear systems in the generated code, and derives nothing else (no
     closed form; only the energy law of text 001, which is not linear, keeps its closed
     impact map); ``"auto"`` (default) is closed form up to
-    :data:`symmech.budget.CLOSED_FORM_MAX_N` coordinates when the closed forms fit their
+    :data:`symmech.algebra.budget.CLOSED_FORM_MAX_N` coordinates when the closed forms fit their
     budgets, else ``linear_solve``.
 
-    Budgets (:mod:`symmech.budget`).  The closed forms are first sized from the structure
+    Budgets (:mod:`symmech.algebra.budget`).  The closed forms are first sized from the structure
     (:func:`symmech.codegen.closed_form_budget.closed_form_cost`, at once), then derived
-    within :data:`symmech.budget.CLOSED_FORM_SECONDS`.  Over either budget, ``"auto"``
+    within :data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`.  Over either budget, ``"auto"``
     takes ``linear_solve`` and says so in ``omitted`` and :attr:`ScenePlan.fallback`;
     ``"closed_form"`` raises :class:`CodegenError` naming the stage and the budget.
     ``functions`` restricts the kinds
@@ -772,7 +772,7 @@ def _energy(M: sp.Matrix, v: Sequence[sp.Symbol], V: sp.Expr) -> sp.Expr:
 
 def _energy_law_map(scene: Scene, wall) -> object:
     """The closed-form impact map of an energy-law wall under ``linear_solve`` (there is
-    no linear system to solve for it), within :data:`symmech.budget.CLOSED_FORM_SECONDS`;
+    no linear system to solve for it), within :data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`;
     over budget a :class:`CodegenError` names the wall and the budget."""
     stage = f"closed-form energy-law impact map of wall {wall.name!r}"
     try:
@@ -784,7 +784,7 @@ def _energy_law_map(scene: Scene, wall) -> object:
 
 def _jacobian(scene: Scene) -> sp.Matrix | str:
     """``d(S(q) v, v_dot)/d(q, v)`` from the closed-form acceleration (Carnot paper eq. 5),
-    derived within :data:`symmech.budget.CLOSED_FORM_SECONDS`; over budget, the note that
+    derived within :data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`; over budget, the note that
     says why it is left out."""
     stage = f"Jacobian of scene {scene.name!r}"
     try:

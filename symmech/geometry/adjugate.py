@@ -12,7 +12,7 @@ whose exact divisions or powers of A cannot be reduced on the way, must carry).
 
 Cost: ``n 2^(n-1)`` products for the minors and as many for the cofactors, so the routine
 is meant for n up to about 8; a term budget bounds the work: when the minors formed so far
-hold more terms than ``budget``, :class:`symmech.budget.BudgetExceeded` is raised.
+hold more terms than ``budget``, :class:`symmech.algebra.budget.BudgetExceeded` is raised.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from collections.abc import Callable, Sequence
 from itertools import combinations
 from typing import Any
 
-from symmech.budget import BudgetExceeded, checkpoint
+from symmech.algebra.budget import BudgetExceeded, checkpoint
 
 __all__ = ["adjugate_det"]
 
@@ -83,7 +83,7 @@ def adjugate_det(
 
     def keep(p: Poly) -> Poly:
         nonlocal held
-        checkpoint()  # the deadline of a stage around this one (symmech.budget.time_limit)
+        checkpoint()  # the deadline of a stage around this one (symmech.algebra.budget.time_limit)
         p = reduce(p)
         held += len(p)
         if budget is not None and held > budget:

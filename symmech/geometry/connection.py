@@ -109,7 +109,7 @@ def _raise_index(
       returned with :func:`tidy` applied, which skips large entries, so the cost stays
       bounded and the result exact;
     * ``"full"``: ``"light"``, then ``sympy.simplify`` on each entry of at most
-      :data:`symmech.budget.FULL_SIMPLIFY_OPS` operations, kept only when it is not
+      :data:`symmech.algebra.budget.FULL_SIMPLIFY_OPS` operations, kept only when it is not
       longer (:func:`polish`).
     """
     n = g.rows

@@ -41,8 +41,8 @@ Solving ``A X = B`` (:func:`field_solve`), strategy by cost:
   would cancel a gcd at every elimination step, and on trigonometric entries, whose
   unreduced intermediates are much larger than the reduced result (the 4 x 4
   pendulum-on-cart metric did not finish in 250 s), that dominates the cost;
-* a larger block (:data:`symmech.budget.FIELD_BLOCK_MAX_N`), or one whose minors exceed
-  :data:`symmech.budget.FIELD_MINOR_TERMS` terms: ``None`` (the normal
+* a larger block (:data:`symmech.algebra.budget.FIELD_BLOCK_MAX_N`), or one whose minors exceed
+  :data:`symmech.algebra.budget.FIELD_MINOR_TERMS` terms: ``None`` (the normal
   form itself is then too large to be useful: the determinant of the 9 x 9
   pendulum-on-cart metric has 3^8 = 6561 terms).
 """
@@ -57,8 +57,8 @@ from sympy.core.mul import _keep_coeff
 from sympy.polys.constructor import construct_domain
 from sympy.polys.matrices import DomainMatrix
 
-from symmech import budget as limits
-from symmech.budget import BudgetExceeded
+from symmech.algebra import budget as limits
+from symmech.algebra.budget import BudgetExceeded
 from symmech.geometry.adjugate import adjugate_det
 
 __all__ = [
@@ -138,7 +138,7 @@ class RationalField:
                         self.forward[partner] = dummy = sp.Dummy("gen")
                         self.back[dummy] = partner
                         replaced.append(dummy)
-        #: why the field declined (None when it exists): a budget of symmech.budget
+        #: why the field declined (None when it exists): a budget of symmech.algebra.budget
         self.declined: str | None = _over_budget(replaced)
         if self.declined is None:
             K, _ = construct_domain(replaced, field=True)
@@ -314,7 +314,7 @@ class RationalField:
     def solve(self, A: Rows, B: Rows, budget: int | None = None) -> Rows | None:
         """``X`` with ``A X = B`` (square, generically regular A), entries normalised; the
         strategy of the module docstring.  ``None`` when it declines (block too large or
-        over the term budget, by default :data:`symmech.budget.FIELD_MINOR_TERMS`)."""
+        over the term budget, by default :data:`symmech.algebra.budget.FIELD_MINOR_TERMS`)."""
         budget = limits.FIELD_MINOR_TERMS if budget is None else budget
         n = len(A)
         ncols = len(B[0]) if B else 0
@@ -379,9 +379,9 @@ class RationalField:
 
 def _over_budget(exprs: Sequence[sp.Expr]) -> str | None:
     """The reason the inputs are not expanded into a polynomial domain, or None: one of
-    them expands (bound of :func:`symmech.budget.expanded_terms`) to more than
-    :data:`symmech.budget.FIELD_TERMS` terms or to a degree above
-    :data:`symmech.budget.FIELD_DEGREE` (construct_domain would expand it in full)."""
+    them expands (bound of :func:`symmech.algebra.budget.expanded_terms`) to more than
+    :data:`symmech.algebra.budget.FIELD_TERMS` terms or to a degree above
+    :data:`symmech.algebra.budget.FIELD_DEGREE` (construct_domain would expand it in full)."""
     for e in exprs:
         terms, degree = limits.expanded_terms(e)
         if terms > limits.FIELD_TERMS:
@@ -441,7 +441,7 @@ def _monomial_gcd(p: Any) -> tuple[tuple[int, ...], Any]:
 
 def _quotient(field: Any, num: Any, den: Any) -> Frac:
     """``num / den`` cancelled: by the full gcd when ``den`` has at most
-    :data:`symmech.budget.FIELD_GCD_TERMS` terms, else by the monomial and integer content
+    :data:`symmech.algebra.budget.FIELD_GCD_TERMS` terms, else by the monomial and integer content
     only (still exact)."""
     if not num:
         return field.zero

@@ -38,7 +38,7 @@ import mpmath
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from symmech.budget import BudgetExceeded
+from symmech.algebra.budget import BudgetExceeded
 from symmech.declaration.sampling import sample_points
 from symmech.errors import SceneError
 from symmech.geometry.field import common_domain

@@ -16,17 +16,17 @@ and large systems never pay for a full ``sympy.simplify``:
     by cost and declines (falling back to the entries as built, then :func:`tidy`) when
     the normal form would be too large.  Single expressions (Christoffel symbols of the
     first kind, brackets) get :func:`normal_form` when they have at most
-    :data:`symmech.budget.LIGHT_SIMPLIFY_OPS` operations. :func:`tidy` itself, used on
+    :data:`symmech.algebra.budget.LIGHT_SIMPLIFY_OPS` operations. :func:`tidy` itself, used on
     intermediate results, applies ``sympy.cancel`` to rational expressions (no function
     applications such as sin, sqrt of a non-symbol) of at most that many operations,
     clearing nested fractions such as those from a Gram inverse, then ``factor_terms``;
     expressions with functions get ``factor_terms`` only.
 ``"full"`` (default for Christoffel symbols and connection coefficients)
     ``"light"``, then ``sympy.simplify`` (which includes trigsimp) on each entry of at
-    most :data:`symmech.budget.FULL_SIMPLIFY_OPS` operations, the simplified form kept
+    most :data:`symmech.algebra.budget.FULL_SIMPLIFY_OPS` operations, the simplified form kept
     only when it has no more operations (:func:`polish`).
 
-The thresholds (budgets of :mod:`symmech.budget`) keep the cost bounded: simplification is
+The thresholds (budgets of :mod:`symmech.algebra.budget`) keep the cost bounded: simplification is
 skipped, never approximated, and every result is exact. An unknown level raises
 :class:`symmech.errors.SceneError`.
 """
@@ -38,7 +38,7 @@ from typing import Literal
 
 import sympy as sp
 
-from symmech import budget as limits
+from symmech.algebra import budget as limits
 from symmech.errors import SceneError
 from symmech.geometry.field import RationalField
 
@@ -99,7 +99,7 @@ def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
     sin(x)
 
     Expressions over ``max_ops`` operations (default
-    :data:`symmech.budget.LIGHT_SIMPLIFY_OPS`), numbers, and expressions admitting no exact
+    :data:`symmech.algebra.budget.LIGHT_SIMPLIFY_OPS`), numbers, and expressions admitting no exact
     field are returned as given, then passed to ``factor_terms``.
     """
     expr = sp.sympify(expr)
@@ -116,7 +116,7 @@ def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
 
 def polish(expr: sp.Expr, level: Level) -> sp.Expr:
     """For ``level="full"``: ``sympy.simplify`` on expressions of at most
-    :data:`symmech.budget.FULL_SIMPLIFY_OPS` operations, kept only when it has no more
+    :data:`symmech.algebra.budget.FULL_SIMPLIFY_OPS` operations, kept only when it has no more
     operations than ``expr``; else ``expr``."""
     if level != "full" or expr.is_number or expr.is_Symbol:
         return expr

@@ -27,11 +27,11 @@ P(Y^A), C^AB, C_AB, beta^B and N):
 Cost.  Determinants and adjugates are formed by sympy's division-free characteristic
 polynomial route (``DomainMatrix.adj_det``); the only gcds are the final ones, entry by
 entry against the shared denominator, and they are taken only when the denominator has at
-most :data:`symmech.budget.IMPACT_GCD_TERMS` terms and the numerator at most
-:data:`symmech.budget.IMPACT_GCD_NUMERATOR_TERMS`
+most :data:`symmech.algebra.budget.IMPACT_GCD_TERMS` terms and the numerator at most
+:data:`symmech.algebra.budget.IMPACT_GCD_NUMERATOR_TERMS`
 (otherwise only the common monomial and integer content are cancelled: the entry stays
 exact, a fraction over the shared denominator).  When a polynomial grows beyond
-:data:`symmech.budget.IMPACT_TERMS` terms the route gives up (``None``) and the caller uses
+:data:`symmech.algebra.budget.IMPACT_TERMS` terms the route gives up (``None``) and the caller uses
 plain sympy arithmetic. Whenever every final gcd is taken, each entry is the cancelled
 fraction of K, the same canonical element the fraction-field route produces.
 
@@ -47,8 +47,8 @@ from typing import Any
 import sympy as sp
 from sympy.polys.matrices import DomainMatrix
 
-from symmech import budget as limits
-from symmech.budget import BudgetExceeded
+from symmech.algebra import budget as limits
+from symmech.algebra.budget import BudgetExceeded
 from symmech.errors import ImpactError
 from symmech.geometry.field import RationalField, common_domain
 

@@ -36,7 +36,7 @@ undecided the general Theorem 3.9/4.3 is used, which is valid in every case.
 Deciding "the residual is identically zero", by cost (:attr:`CarnotResult.route`):
 
 * ``"fraction field"``: when the map is small (at most
-  :data:`symmech.budget.CARNOT_FIELD_OPS` operations in the matrices involved), the
+  :data:`symmech.algebra.budget.CARNOT_FIELD_OPS` operations in the matrices involved), the
   residual is formed in the fraction field of the entries (:mod:`symmech.impacts.quadratic`),
   each velocity coefficient cancelled (small ones also simplified, for trigonometric
   relations): a proof;
@@ -59,7 +59,7 @@ from typing import Any
 
 import sympy as sp
 
-from symmech import budget as limits
+from symmech.algebra import budget as limits
 from symmech.declaration.latex import latex_text
 from symmech.impacts.identity import Unsupported, identically_zero
 from symmech.impacts.projectors import ImpactProjectors

@@ -34,7 +34,7 @@ import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
-from symmech import budget as limits
+from symmech.algebra import budget as limits
 from symmech.declaration.wallpoints import points_on_wall
 from symmech.errors import ImpactError
 from symmech.impacts.adjugate import shared_denominators

@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Literal
 
 import sympy as sp
 
-from symmech import budget as limits
+from symmech.algebra import budget as limits
 from symmech.declaration.latex import latex_text
 from symmech.declaration.sampling import sample_points
 from symmech.declaration.symbols import t as TIME

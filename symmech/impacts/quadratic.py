@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symmech import budget as limits
+from symmech.algebra import budget as limits
 from symmech.geometry.field import RationalField, common_domain
 
 __all__ = ["Affine", "QuadraticForm", "common_domain"]
@@ -108,7 +108,7 @@ class QuadraticForm:
 
 def _clean(e: sp.Expr, simplify: bool) -> sp.Expr:
     """A coefficient cancelled (and simplified when asked and small); returned as it is,
-    exact but not normalised, when its expansion is over :data:`symmech.budget.FIELD_TERMS`
+    exact but not normalised, when its expansion is over :data:`symmech.algebra.budget.FIELD_TERMS`
     (the bound the fraction field declines at: ``cancel`` of such a coefficient takes
     minutes, and the callers decide zero by exact evaluation instead)."""
     e = sp.sympify(e)

@@ -21,7 +21,7 @@ The stabilising step implemented here is:
    :func:`symmech.impacts.energy_law`), a sum of non-negative terms which cannot cancel
    and is never negative in floating point.
 
-Expressions above :data:`symmech.budget.STABLE_OPS` operations are left as they are (the
+Expressions above :data:`symmech.algebra.budget.STABLE_OPS` operations are left as they are (the
 cost of ``factor`` grows quickly); this mirrors :mod:`symmech.geometry.simplification`.
 """
 
@@ -31,7 +31,7 @@ from collections.abc import Iterable, Sequence
 
 import sympy as sp
 
-from symmech import budget as limits
+from symmech.algebra import budget as limits
 
 __all__ = ["stable_coefficient", "stable_linear", "stable_matrix"]
 
@@ -89,8 +89,8 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     factored parameter coefficients, so ``I + m (a^4 - 2 a^2 b^2 + b^4) sin^2`` becomes
     ``I + m (a - b)^2 (a + b)^2 sin^2`` (no cancellation when a ~ b).  Returned unchanged:
     expressions already in that form (a cheap structural test, :func:`_already_stable`),
-    and those over the budgets :data:`symmech.budget.STABLE_OPS` (operations) or
-    :data:`symmech.budget.STABLE_TERMS` (terms of their expansion).
+    and those over the budgets :data:`symmech.algebra.budget.STABLE_OPS` (operations) or
+    :data:`symmech.algebra.budget.STABLE_TERMS` (terms of their expansion).
 
     >>> import sympy as sp
     >>> I, m, R = sp.symbols("I m R", positive=True)

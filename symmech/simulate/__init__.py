@@ -11,9 +11,9 @@ contact modes) in :mod:`.system`.
 import sys
 import types
 
-from symmech.simulate.api import CONTACT_MODES, simulate, system_for
 from symmech.simulate.batch import BatchResult, simulate_batch
 from symmech.simulate.result import Event, SimulationResult
+from symmech.simulate.run import CONTACT_MODES, simulate, system_for
 from symmech.simulate.system import BACKENDS, HybridSystem, SimulationError, contact_scene
 
 __all__ = [

@@ -28,11 +28,11 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.api import system_for
-from symmech.simulate.checks import check_run, states
+from symmech.simulate.arguments import check_run, states
 from symmech.simulate.csim import INFO_HEAD, decode, library, options_vector
 from symmech.simulate.hybrid import Options
 from symmech.simulate.result import EVENT_KINDS, STATUSES
+from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, check_parameters
 
 __all__ = ["BatchResult", "simulate_batch"]

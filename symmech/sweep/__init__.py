@@ -14,7 +14,7 @@ import sys
 import types
 from typing import Any
 
-from symmech.sweep.api import OUTPUTS, sweep
+from symmech.sweep.driver import OUTPUTS, sweep
 from symmech.sweep.grid import product
 
 __all__ = ["OUTPUTS", "product", "sweep"]

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from symmech.errors import SymmechError
-from symmech.simulate.checks import numbers
+from symmech.simulate.arguments import numbers
 from symmech.simulate.result import STATUSES
 
 __all__ = ["add_command", "run_command"]
@@ -87,7 +87,7 @@ def run_command(
     """Run ``symmech sweep`` (see the module docstring); ``load`` reads a scene file or
     built-in name into a :class:`~symmech.scenefile.SceneFile`, ``say`` reports progress.
     Returns 0 once the table is written (runs that failed are rows of it)."""
-    from symmech.sweep.api import sweep
+    from symmech.sweep.driver import sweep
 
     out = str(args.out)
     kind = Path(out).suffix.lower()

@@ -1,6 +1,6 @@
 """Running a sweep's chunks: in local threads, or as Dask tasks on a cluster.
 
-Both routes take the chunks of a :class:`~symmech.sweep.plan.Plan` and hand each finished
+Both routes take the chunks of a :class:`~symmech.sweep.chunks.Plan` and hand each finished
 chunk's table to a ``sink`` (which keeps it or writes it to the store) in the order they
 finish; at most ``window`` chunks are prepared and not yet finished at any time, so memory
 stays flat however long the sweep.
@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from typing import Any, TextIO
 
-from symmech.sweep.plan import Plan, finish, prepare
+from symmech.sweep.chunks import Plan, finish, prepare
 from symmech.sweep.worker import run_chunk
 
 __all__ = ["Progress", "run_dask", "run_local"]

@@ -21,7 +21,7 @@ Two kinds of reaction, chosen by the stage and documented with each limit:
   ``auto``) or a :class:`~symmech.codegen.plan.CodegenError` (strategy ``closed_form``).
 
 The limits are module attributes read when a stage runs: a user who accepts a longer
-derivation sets, e.g., ``symmech.budget.CLOSED_FORM_SECONDS = 60``.  A test
+derivation sets, e.g., ``symmech.algebra.budget.CLOSED_FORM_SECONDS = 60``.  A test
 (``tests/test_budget.py``) checks that no module of the symbolic layers defines another
 budget exception or threshold.
 """
@@ -134,7 +134,7 @@ STABLE_ENTRY_OPS = 200
 class BudgetExceeded(SymmechError):
     """A symbolic stage exceeded its budget.
 
-    ``stage`` names the stage, ``budget`` the limit's name in :mod:`symmech.budget`,
+    ``stage`` names the stage, ``budget`` the limit's name in :mod:`symmech.algebra.budget`,
     ``measure`` its unit, ``limit`` its value and ``measured`` what was found (None when
     unknown, e.g. a time limit hit inside a library call).
     """
@@ -152,7 +152,7 @@ class BudgetExceeded(SymmechError):
         found = "" if measured is None else f": {_number(measured)} {measure}"
         super().__init__(
             f"{stage}: over its budget {budget} = {_number(limit)} {measure}{found}"
-            " (symmech.budget)"
+            " (symmech.algebra.budget)"
         )
 
 

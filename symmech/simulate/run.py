@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.checks import CONTACT_MODES, check_run, states
+from symmech.simulate.arguments import CONTACT_MODES, check_run, states
 from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
 from symmech.simulate.hybrid import Options, run
 from symmech.simulate.result import SimulationResult

@@ -37,12 +37,12 @@ from symmech.declaration.expressions import parse_expression
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
-from symmech.simulate.api import CONTACT_MODES, system_for
 from symmech.simulate.csim import INFO_HEAD, library, options_vector
 from symmech.simulate.hybrid import Options
+from symmech.simulate.run import CONTACT_MODES, system_for
 from symmech.simulate.system import Functions, SimulationError
+from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
 from symmech.sweep.grid import read_grid, resolve_columns
-from symmech.sweep.plan import FIXED_COLUMNS, INFO_OUTPUTS, Plan
 from symmech.sweep.runner import Progress, run_dask, run_local
 from symmech.sweep.store import Store
 from symmech.sweep.worker import LibrarySource, LoopOptions
