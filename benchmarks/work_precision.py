@@ -59,18 +59,7 @@ def main(argv: list[str] | None = None) -> int:
                 )
         best = [r for r in table if r.route == "baseline" and math.isfinite(r.final_error)]
         if best:
-            err = min(r.final_error for r in best)
-            fast = [r for r in table if r.route == "c" and r.final_error <= err]
-            if fast:
-                c = min(fast, key=lambda r: r.seconds)
-                b = min(
-                    (r for r in best if r.final_error <= max(err, c.final_error)),
-                    key=lambda r: r.seconds,
-                )
-                print(
-                    f"\nat equal error ({err:.1e}): baseline {b.seconds:.2e} s, C"
-                    f" {c.seconds:.2e} s: {b.seconds / c.seconds:.0f}x"
-                )
+            _equal_error(table, best)
         else:
             print(
                 "\nthe baseline reaches t_end at no tolerance: no equal-error comparison;"
@@ -80,6 +69,52 @@ def main(argv: list[str] | None = None) -> int:
         wp.plot(case, table, str(png))
         print(f"\nplot: {png} ({time.perf_counter() - clock:.0f} s)\n")
     return 0
+
+
+def _equal_error(table: list, best: list) -> None:
+    """Print the C backend's speed-up over the baseline at equal error, three ways.
+
+    * strict: the cheapest C run (any method, any tolerance) whose error is at most the
+      baseline's smallest error, against the cheapest baseline run as accurate as that C run;
+    * along the curve: for every baseline run, the cheapest C run at least as accurate;
+      the smallest and largest of these ratios;
+    * at the floor: when every run of both is below FLOOR (1e-12 in a state of order one:
+      a few thousand ulps, where the error is the rounding of the arithmetic and differs
+      between runs by luck), the cheapest run of each.
+    """
+    c_runs = [r for r in table if r.route == "c" and math.isfinite(r.final_error)]
+    err = min(r.final_error for r in best)
+    fast = [r for r in c_runs if r.final_error <= err]
+    if fast:
+        c = min(fast, key=lambda r: r.seconds)
+        b = min(
+            (r for r in best if r.final_error <= max(err, c.final_error)), key=lambda r: r.seconds
+        )
+        print(
+            f"\nat equal error, strict ({err:.1e}): baseline {b.seconds:.2e} s,"
+            f" C {c.seconds:.2e} s ({c.method}, rtol {c.rtol:.0e}): {b.seconds / c.seconds:.0f}x"
+        )
+    ratios = []
+    for b in best:
+        ok = [r for r in c_runs if r.final_error <= b.final_error]
+        if ok:
+            ratios.append(b.seconds / min(ok, key=lambda r: r.seconds).seconds)
+    if ratios:
+        print(
+            f"along the curve (each baseline run against the cheapest C run at least as"
+            f" accurate): {min(ratios):.0f}x to {max(ratios):.0f}x"
+        )
+    if c_runs and all(r.final_error < FLOOR for r in [*best, *c_runs]):
+        b = min(best, key=lambda r: r.seconds)
+        c = min(c_runs, key=lambda r: r.seconds)
+        print(
+            f"at the floor (every error of both below {FLOOR:.0e}): baseline {b.seconds:.2e} s,"
+            f" C {c.seconds:.2e} s ({c.method}, rtol {c.rtol:.0e}): {b.seconds / c.seconds:.0f}x"
+        )
+
+
+#: errors below this, in a state of order one, are the arithmetic's rounding
+FLOOR = 1e-12
 
 
 if __name__ == "__main__":

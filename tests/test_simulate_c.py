@@ -556,3 +556,108 @@ def test_simulator_is_clean_under_address_and_undefined_sanitizers(tmp_path, mak
     run = subprocess.run([str(exe)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stdout + run.stderr
     assert run.stdout.count("status 1 ") == 4, run.stdout  # every method finished
+
+
+# -- one run from Python: workspaces, lazy events, cached checks, compiler flags ----------
+
+
+def _ellipse_run(**kw):
+    return sm.simulate(
+        ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 3.5, params=ELLIPSE, **kw
+    )
+
+
+def test_runs_in_threads_equal_the_sequential_run_bit_for_bit():
+    from concurrent.futures import ThreadPoolExecutor
+
+    ref = _ellipse_run(rtol=1e-8)
+    with ThreadPoolExecutor(4) as pool:
+        runs = list(pool.map(lambda _: _ellipse_run(rtol=1e-8), range(16)))
+    for r in runs:
+        assert np.array_equal(r.t, ref.t) and np.array_equal(r.q, ref.q)
+        assert np.array_equal(r.v, ref.v)
+        assert [e.time for e in r.events] == [e.time for e in ref.events]
+
+
+def test_a_run_longer_than_the_buffers_continues_across_pauses(monkeypatch):
+    """Buffers of 8 step rows (the least the loop works with): it pauses every few steps;
+    the run equals the one with the usual buffers (a fresh thread, so a fresh workspace of
+    the patched size)."""
+    import threading
+
+    from symmech.simulate import c_run
+
+    ref = _ellipse_run(rtol=1e-6)
+    monkeypatch.setattr(c_run, "STEP_ROWS", 1)
+    out = []
+    worker = threading.Thread(target=lambda: out.append(_ellipse_run(rtol=1e-6)))
+    worker.start()
+    worker.join()
+    (small,) = out
+    assert len(ref.t) > 40 and len(ref.events) > 8
+    assert np.array_equal(small.t, ref.t) and np.array_equal(small.y, ref.y)
+    assert [(e.time, e.kind) for e in small.events] == [(e.time, e.kind) for e in ref.events]
+    assert np.allclose(small(1.234), ref(1.234), rtol=0, atol=0)
+
+
+def test_events_are_built_on_first_access_and_compare_as_a_list():
+    from symmech.simulate.result import EventTable
+
+    res = _ellipse_run()
+    assert isinstance(res.events, EventTable) and res.events._built is None
+    assert len(res.events) == res.stats["impacts"] == 11 and res.events._built is None
+    first, last = res.events[0], res.events[-1]
+    assert res.events[:2] == [first, res.events[1]][:2] and res.events[1:3][0] is res.events[1]
+    assert first.kind == "impact" and first.wall_name == "floor" and first.time < last.time
+    assert res.impacts() == list(res.events)
+    assert len(first.q) == 3 and first.v_plus[1] > 0 > first.v_minus[1]
+    none = sm.simulate(ellipse_gravity(), (0.0, 3.0, 0.0), (0.0, 0.0, 0.0), 0.1, params=ELLIPSE)
+    assert none.events == [] and not none.events and none.events != [first]
+
+
+def test_parameters_checked_again_whenever_they_change():
+    ok = _ellipse_run(rtol=1e-6)
+    assert ok.status == "finished"
+    bad = dict(ELLIPSE, alpha=1.5)
+    with pytest.raises(SimulationError, match=r"restitution .* outside \[0, 1\]"):
+        sm.simulate(
+            ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 1.0, params=bad
+        )
+    with pytest.raises(SimulationError, match="declared positive"):
+        sm.simulate(
+            ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 1.0, params=dict(ELLIPSE, m=-1.0)
+        )
+    nan = dict(ELLIPSE, g=float("nan"))
+    for _ in range(2):  # NaN never equals the cached parameters
+        with pytest.raises(SimulationError, match="finite"):
+            sm.simulate(ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 1.0, params=nan)
+    heavier = sm.simulate(
+        ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 3.5, params=dict(ELLIPSE, g=20.0)
+    )
+    assert heavier.events[0].time < ok.events[0].time  # the new g was used
+
+
+def test_simulator_flags_do_not_change_the_bits():
+    """The simulator library is built at -O3; the same run built at the code generator's
+    -O2 gives the same bits (C99 mode: no FMA contraction, no reassociation)."""
+    from symmech.codegen.build import DEFAULT_FLAGS
+    from symmech.simulate.c_run import run_c
+    from symmech.simulate.csim import SIMULATOR_FLAGS, CLibrary, library
+    from symmech.simulate.hybrid import Options
+    from symmech.simulate.system import check_parameters
+
+    assert "-O3" in SIMULATOR_FLAGS and "-O2" in DEFAULT_FLAGS
+    scene = ellipse_gravity()
+    system = system_for(scene, "c")
+    values = check_parameters(scene, ELLIPSE)
+    y0 = np.array([0.0, 1.5, 0.3, 0.0, 0.0, 2.0])
+    opts = Options(t_end=6.0, rtol=1e-9, atol=1e-11, max_events=100_000, contact="persistent")
+    fast = run_c(system, values, y0, 0.0, opts, max_step=6.0)
+    assert library(system).flags == SIMULATOR_FLAGS
+    system.__dict__["_c_simulator"] = CLibrary(system, flags=DEFAULT_FLAGS)
+    try:
+        plain = run_c(system, values, y0, 0.0, opts, max_step=6.0)
+    finally:
+        del system.__dict__["_c_simulator"]
+    assert fast.status == plain.status and len(fast.events) == len(plain.events) > 11
+    assert np.array_equal(fast.t, plain.t) and np.array_equal(fast.y, plain.y)

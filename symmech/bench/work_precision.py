@@ -3,7 +3,8 @@
 For a case (:mod:`symmech.bench.cases`) the reference is a closed form where one exists
 (the bouncing ball: its impact times and its state at t_end) and otherwise the mpmath run
 of the same algorithm (:func:`symmech.simulate.reference.reference_run`, 24 digits).  Each
-row is one (backend, method, tolerance): the median run time over ``repeats`` runs, the
+row is one (backend, method, tolerance): the median run time over at least ``repeats`` runs
+and :data:`MIN_SECONDS` of runs, the
 final-state error ``max |y(t_end) - y_ref(t_end)|``, the worst event-time error over the
 impacts both runs have (k-th against k-th), the energy drift the run reports, and the
 impacts counted against the reference's.  The baseline a user writes today
@@ -87,6 +88,18 @@ def reference(case: Case, dps: int = 24) -> Reference:
     )
 
 
+#: A route is timed over at least ``repeats`` runs and at least this many seconds of runs
+#: (at most MAX_RUNS): a fast route's median is then taken over enough runs to be stable.
+MIN_SECONDS = 0.2
+MAX_RUNS = 2000
+
+
+def _more(seconds: list[float], repeats: int) -> bool:
+    """Whether to time another run (see :data:`MIN_SECONDS`)."""
+    n = len(seconds)
+    return n < repeats or (sum(seconds) < MIN_SECONDS and n < MAX_RUNS)
+
+
 def _event_error(times: Sequence[float], ref: Sequence[float]) -> float:
     k = min(len(times), len(ref))
     return max((abs(times[i] - ref[i]) for i in range(k)), default=0.0)
@@ -106,7 +119,7 @@ def measure(
     atol = rtol / 100
     seconds: list[float] = []
     if route == "baseline":
-        for _ in range(repeats):
+        while _more(seconds, repeats):
             b = baseline_run(
                 scene,
                 case.q0,
@@ -132,7 +145,8 @@ def measure(
             b.status,
             b.min_gap,
         )
-    for _ in range(repeats + 1):  # the first run compiles and loads: not timed
+    first = True  # the first run compiles and loads: not timed
+    while first or _more(seconds, repeats):
         clock = time.perf_counter()
         res = simulate_pkg.simulate(
             scene,
@@ -145,8 +159,10 @@ def measure(
             rtol=rtol,
             atol=atol,
         )
+        if first:
+            first = False
+            continue
         seconds.append(time.perf_counter() - clock)
-    seconds = seconds[1:]
     times = [e.time for e in res.impacts()]
     final = float(np.max(np.abs(res.y[-1] - ref.y_end))) if res.success else math.inf
     return Row(

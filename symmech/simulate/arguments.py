@@ -79,7 +79,7 @@ def states(value: object, n: int, what: str, *, rows: bool = False) -> np.ndarra
         return a
     if a.shape != (n,):
         raise SimulationError(f"{what}: expected shape ({n},), got {a.shape}")
-    if not np.all(np.isfinite(a)):
+    if not np.isfinite(a).all():
         raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
     return a
 

@@ -12,13 +12,13 @@ is returned.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 
-__all__ = ["STATUSES", "Event", "SimulationResult"]
+__all__ = ["STATUSES", "Event", "EventTable", "SimulationResult"]
 
 #: Final statuses of a run.
 STATUSES = ("finished", "zeno", "max_events", "failed")
@@ -57,6 +57,66 @@ class Event:
         )
 
 
+class EventTable(Sequence[Event]):
+    """The events of a run kept as the rows the C loop wrote; the :class:`Event` records
+    are built on first access (a run whose events are never read never builds them).
+
+    Each row of ``rows`` is ``time, energy change, normal speed, q, v_minus, v_plus``; each
+    row of ``ids`` is ``wall, kind`` (an index into :data:`EVENT_KINDS`).  It compares
+    equal to a list of the same events.
+    """
+
+    __slots__ = ("_built", "_n", "ids", "names", "rows")
+
+    def __init__(self, rows: np.ndarray, ids: np.ndarray, names: Sequence[str], n: int):
+        self.rows, self.ids, self.names, self._n = rows, ids, tuple(names), n
+        self._built: list[Event] | None = None
+
+    def _events(self) -> list[Event]:
+        if self._built is None:
+            n, names = self._n, self.names
+            self._built = [
+                Event(
+                    time=float(row[0]),
+                    wall=int(w),
+                    wall_name=names[int(w)],
+                    kind=EVENT_KINDS[int(kind)],
+                    q=row[3 : 3 + n].copy(),
+                    v_minus=row[3 + n : 3 + 2 * n].copy(),
+                    v_plus=row[3 + 2 * n : 3 + 3 * n].copy(),
+                    energy_change=float(row[1]),
+                    normal_speed=float(row[2]),
+                )
+                for row, (w, kind) in zip(self.rows, self.ids, strict=True)
+            ]
+        return self._built
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    @overload
+    def __getitem__(self, k: int) -> Event: ...
+
+    @overload
+    def __getitem__(self, k: slice) -> list[Event]: ...
+
+    def __getitem__(self, k: int | slice) -> Event | list[Event]:
+        return self._events()[k]
+
+    def __iter__(self) -> Iterator[Event]:
+        return iter(self._events())
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, EventTable):
+            other = other._events()
+        return isinstance(other, list) and self._events() == other
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return repr(self._events())
+
+
 #: The continuous output of one step, a function of the (absolute) time.
 Interpolant = Callable[[float], np.ndarray]
 
@@ -68,7 +128,7 @@ class SimulationResult:
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
-    events: list[Event]
+    events: Sequence[Event]
     status: str
     message: str
     stats: dict[str, Any]

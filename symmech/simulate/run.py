@@ -157,7 +157,7 @@ def simulate(
         samples=event_samples,
     )
     if backend == "c":
-        from symmech.simulate.csim import run_c
+        from symmech.simulate.c_run import run_c
 
         return run_c(system, values, y0, t0f, opts, method=method, max_step=step_cap)
     make: Any

@@ -116,6 +116,11 @@ class _ParameterRules:
     nonnegative: tuple[bool, ...]
     #: (wall name, restitution as printed, its value as a function of the parameters)
     restitutions: tuple[tuple[str, str, Any], ...]
+    #: the last plain ``{name: float}`` that passed, and its checked values (a run repeated
+    #: with the same parameters is not checked again); one slot, replaced whole
+    last: list[tuple[dict[str, float], dict[str, float]]] = field(
+        default_factory=list, compare=False
+    )
 
 
 _RULES: weakref.WeakKeyDictionary[Scene, _ParameterRules] = weakref.WeakKeyDictionary()
@@ -144,6 +149,16 @@ def check_parameters(scene: Scene, params: object) -> dict[str, float]:
     """``params`` as ``{name: value}``, every scene parameter given, finite, and with the
     sign its symbol declares (positive, nonnegative) and restitutions in [0, 1]."""
     rules = _rules(scene)
+    plain = type(params) is dict and all(type(x) is float for x in params.values())
+    if plain and rules.last and rules.last[0][0] == params:
+        return dict(rules.last[0][1])
+    out = _checked_parameters(rules, params)
+    if plain:
+        rules.last[:] = [(dict(params), dict(out))]  # type: ignore[arg-type]
+    return out
+
+
+def _checked_parameters(rules: _ParameterRules, params: object) -> dict[str, float]:
     names = list(rules.names)
     if params is None:
         params = {}

@@ -32,7 +32,6 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from symmech.codegen.build import DEFAULT_FLAGS
 from symmech.declaration.expressions import parse_expression
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
@@ -297,7 +296,7 @@ def sweep(
         base_v=base_v,
         options=opts,
         loop=loop,
-        source=LibrarySource(tuple(sorted(lib.sources.items())), lib.spec.prefix, DEFAULT_FLAGS),
+        source=LibrarySource(tuple(sorted(lib.sources.items())), lib.spec.prefix, lib.flags),
         outputs=tuple(outputs),
         energy_conserved=fns.energy_conserved,
         expressions=exprs,
