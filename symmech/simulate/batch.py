@@ -29,13 +29,24 @@ import numpy as np
 
 from symmech.scene import Scene
 from symmech.simulate.arguments import check_run, states
-from symmech.simulate.csim import INFO_HEAD, decode, library, options_vector
+from symmech.simulate.csim import (
+    FINISHED_CODE,
+    INFO_HEAD,
+    REACHED_END_CODE,
+    decode,
+    library,
+    options_vector,
+)
 from symmech.simulate.hybrid import Options
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, check_parameters
 
 __all__ = ["BatchResult", "simulate_batch"]
+
+#: the head of the info row of a run that reached t_end (status finished, reason t_end)
+_REACHED_ROW = np.zeros(INFO_HEAD)
+_REACHED_ROW[0], _REACHED_ROW[1] = FINISHED_CODE, REACHED_END_CODE
 
 
 @dataclass(frozen=True)
@@ -152,17 +163,25 @@ def simulate_batch(
         codes = list(pool.map(chunk, range(len(bounds) - 1)))
     if any(codes):
         raise MemoryError("the C simulator could not allocate its work arrays")
-    decoded = [decode(row, fns.wall_names, tend) for row in info]
-    acc = np.array([np.nan if d[2] is None else d[2] for d in decoded])
+    # a run that reached t_end decodes to ("finished", "reached t_end = ...", None): only
+    # the others are decoded one by one (a per-row decode would cost more than a short run)
+    finished, reached = decode(_REACHED_ROW, fns.wall_names, tend)[:2]
+    status = np.full(N, STATUSES.index(finished), dtype=np.int64)
+    messages = [reached] * N
+    acc = np.full(N, np.nan)
+    for k in np.flatnonzero((info[:, 0] != _REACHED_ROW[0]) | (info[:, 1] != _REACHED_ROW[1])):
+        st, msg, a = decode(info[k], fns.wall_names, tend)
+        status[k], messages[k] = STATUSES.index(st), msg
+        acc[k] = np.nan if a is None else a
     return BatchResult(
         t=info[:, 21].copy(),
         q=info[:, INFO_HEAD : INFO_HEAD + n].copy(),
         v=info[:, INFO_HEAD + n :].copy(),
-        status=np.array([STATUSES.index(d[0]) for d in decoded], dtype=np.int64),
+        status=status,
         events=info[:, 17:21].astype(np.int64),
         accumulation_time=acc,
         steps=info[:, 11].astype(np.int64),
-        messages=tuple(d[1] for d in decoded),
+        messages=tuple(messages),
     )
 
 

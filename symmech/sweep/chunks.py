@@ -24,7 +24,7 @@ import numpy as np
 
 from symmech.codegen.module import NumericalError
 from symmech.scene import Scene
-from symmech.simulate.csim import INFO_HEAD, decode
+from symmech.simulate.csim import FINISHED_CODE, INFO_HEAD, REACHED_END_CODE, decode
 from symmech.simulate.hybrid import Options
 from symmech.simulate.result import EVENT_KINDS
 from symmech.simulate.system import Functions, HybridSystem, SimulationError, check_parameters
@@ -35,7 +35,7 @@ __all__ = ["FIXED_COLUMNS", "INFO_OUTPUTS", "Plan", "Prepared", "finish", "prepa
 
 #: The info row's status and reason of a run that reached t_end (the template's
 #: ST_FINISHED and R_END, decoded by :func:`symmech.simulate.csim.decode`).
-_FINISHED, _REACHED_END = 1, 1
+_FINISHED, _REACHED_END = FINISHED_CODE, REACHED_END_CODE
 
 #: Outputs read from the C loop's statistics (entry of the info row).
 INFO_OUTPUTS = {
