@@ -147,7 +147,9 @@ def simulate_batch(
     Y = np.ascontiguousarray(np.hstack([Q, V]))
     width = INFO_HEAD + 2 * n
     info = np.zeros((N, width))
-    bounds = np.linspace(0, N, min(threads, N) + 1).astype(int)
+    # more chunks than threads, taken in turn: runs of unequal length balance out
+    pieces = min(N, threads if threads == 1 else 8 * threads)
+    bounds = np.linspace(0, N, pieces + 1).astype(int)
 
     def chunk(k: int) -> int:
         lo, hi = int(bounds[k]), int(bounds[k + 1])
@@ -159,7 +161,7 @@ def simulate_batch(
         info[lo:hi] = block
         return int(status)
 
-    with ThreadPoolExecutor(max_workers=len(bounds) - 1) as pool:
+    with ThreadPoolExecutor(max_workers=min(threads, pieces)) as pool:
         codes = list(pool.map(chunk, range(len(bounds) - 1)))
     if any(codes):
         raise MemoryError("the C simulator could not allocate its work arrays")
