@@ -32,6 +32,7 @@ from symmech.scenefile import (
     load_scene,
     loads_scene,
     read_scene,
+    save_scene,
 )
 
 __version__ = "0.1.0"
@@ -79,6 +80,7 @@ __all__ = [
     "loads_scene",
     "parse_expression",
     "read_scene",
+    "save_scene",
     "shapes",
     "t",
     "velocities",
