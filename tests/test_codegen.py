@@ -454,3 +454,24 @@ def test_golden_files(request, capsys, name, target):
             pytest.fail(
                 f"{path.name} differs from its golden file (pytest --update-golden):\n{diff}"
             )
+
+
+def test_numpy_solve_refuses_non_finite_inputs_for_one_state_and_a_batch():
+    """The NumPy code checks the inputs of its linear solves as the C code does
+    (SYMMECH_NONFINITE): a float64 scalar of one state as a number, a batch element-wise."""
+    x, y = sm.coordinates("x y")
+    a = sp.Symbol("a", positive=True)
+    scene = sm.Scene((x, y), metric=[[2, 1], [1, a + 1]], potential=x * y, name="spd_nonfinite")
+    mod = codegen.generate(scene, "numpy", strategy="linear_solve").load()
+    raw = mod._raw["acceleration"]
+    p = np.array([0.5])
+    ok = raw((np.zeros(2), np.ones(2)), p, None, None)
+    assert np.isfinite(ok).all()
+    for bad in (np.inf, -np.inf, np.nan):
+        with pytest.raises(codegen.NumericalError, match="not finite"):
+            raw((np.array([1.0, bad]), np.ones(2)), p, None, None)  # f = -grad V
+        batch = np.ones((3, 2))
+        batch[1, 0] = bad
+        with pytest.raises(codegen.NumericalError, match="not finite"):
+            raw((batch, np.ones((3, 2))), p, None, None)
+    np.testing.assert_array_equal(raw((np.zeros((1, 2)), np.ones((1, 2))), p, None, None)[0], ok)
