@@ -113,7 +113,8 @@ def test_hostile_names_stay_in_comments_and_docstrings(seed):
                 continue
             tree = ast.parse(text)  # an importable source
             imports = [n for n in ast.walk(tree) if isinstance(n, ast.Import | ast.ImportFrom)]
-            assert [a.name for n in imports for a in n.names] == ["numpy"]
+            # numpy, and math where a linear solve checks the inputs of one state
+            assert [a.name for n in imports for a in n.names] in (["numpy"], ["math", "numpy"])
             for tok in tokenize.generate_tokens(io.StringIO(text).readline):
                 if tok.type not in (tokenize.COMMENT, tokenize.STRING):
                     assert tok.string not in ("os", "system", "pwn"), tok

@@ -620,9 +620,7 @@ def test_parameters_checked_again_whenever_they_change():
     assert ok.status == "finished"
     bad = dict(ELLIPSE, alpha=1.5)
     with pytest.raises(SimulationError, match=r"restitution .* outside \[0, 1\]"):
-        sm.simulate(
-            ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 1.0, params=bad
-        )
+        sm.simulate(ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 1.0, params=bad)
     with pytest.raises(SimulationError, match="declared positive"):
         sm.simulate(
             ellipse_gravity(), (0.0, 1.5, 0.3), (0.0, 0.0, 2.0), 1.0, params=dict(ELLIPSE, m=-1.0)
