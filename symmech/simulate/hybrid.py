@@ -120,6 +120,8 @@ class _Run:
         #: walls grazed and not yet left (psi < 0 at every accepted step end since): a
         #: start inside such a wall is not an event again
         self.grazing: set[int] = set()
+        #: walls released and not yet left beyond tol_psi: searched through psi + tol_psi
+        self.banded: set[int] = set()
 
     @property
     def mode(self) -> int | None:
@@ -227,21 +229,27 @@ class _Run:
                 continue
             psi0 = self.f.psi(w, t0, self.q(seg.y0))
             rate0 = self.f.normal_rate(w, t0, seg.y0) if abs(psi0) <= self.tol_psi else None
-            divided.append(rate0 is not None and rate0 > 0 and w not in self.grazing)
+            g0 = psi0 + self.tol_psi if w in self.banded else psi0
+            divided.append(
+                w not in self.banded and rate0 is not None and rate0 > 0 and w not in self.grazing
+            )
             if w in self.grazing:  # grazed, not left since: counts as inside until it leaves
                 start.append(0 * psi0 - 1)
             elif divided[-1]:
                 start.append(rate0)
-            elif psi0 < 0:
-                start.append(0 * psi0)
+            elif g0 < 0:
+                start.append(0 * g0)
             else:
-                start.append(psi0)
+                start.append(g0)
+        band = [what == "wall" and w in self.banded for w, what in funcs]
 
         def value(i: int, t: float, y: np.ndarray) -> float:
             w, what = funcs[i]
             if what == "release":
                 return self.f.normal_force(w, t, self.q(y), self.v(y))
             psi = self.f.psi(w, t, self.q(y))
+            if band[i]:
+                psi = psi + self.tol_psi
             return psi / (t - t0) if divided[i] else psi
 
         def start_value(i: int) -> float:
@@ -337,6 +345,7 @@ class _Run:
         rate = self.f.normal_rate(wall, self.t, y)
         tol_v = self.tol_v(y)
         self.grazing.discard(wall)
+        self.banded.discard(wall)
         if rate >= -tol_v:
             # reached tangentially: a resting contact if the wall must (or may) hold the
             # body while it still creeps in (lambda_N >= 0), else a grazing touch
@@ -502,6 +511,10 @@ class _Run:
                     self.record(self.t, self.y)
                     for w in [w for w in self.grazing if self.f.psi(w, self.t, self.q(y1)) >= 0]:
                         self.grazing.discard(w)
+                    for w in [
+                        w for w in self.banded if self.f.psi(w, self.t, self.q(y1)) > self.tol_psi
+                    ]:
+                        self.banded.discard(w)
                     self.track_energy()
                     continue
                 t_e, y_e, wall, what = ev
@@ -511,6 +524,7 @@ class _Run:
                 if what == "release":
                     self.event("release", wall, self.y, self.y, 0.0)
                     self.mode = None
+                    self.banded.add(wall)
                 else:
                     self.at_wall(wall)
                 self.record(self.t, self.y)

@@ -108,6 +108,7 @@ typedef struct {
     double energy0, energy_jumps, energy_drift, drift, tol_psi, condition;
     /* walls grazed and not yet left (hybrid._Run.grazing) */
     int grazing[NW > 0 ? NW : 1];
+    int banded[NW > 0 ? NW : 1]; /* released, not yet left beyond tol_psi */
     long steps, rejected, nfev, events, counts[4];
     /* stop */
     int status, reason, stop_wall, why, sub, failed_function;
@@ -693,7 +694,7 @@ static double dip(const double *ts, const double *gs)
 }
 
 typedef struct {
-    int nf, wall[NF], release[NF], divided[NF];
+    int nf, wall[NF], release[NF], divided[NF], band[NF];
     double t0, start[NF];
 } funcs_t;
 
@@ -710,6 +711,7 @@ static double fvalue(sim_t *s, const funcs_t *F, int i, double t, const double *
     int w = F->wall[i];
     if (F->release[i]) return normal_force(s, w, t, y, y + NQ);
     double g = psi(s, w, t, y);
+    if (F->band[i]) g = g + s->tol_psi;
     return F->divided[i] ? g / (t - F->t0) : g;
 }
 
@@ -788,17 +790,22 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
            itself when touched and approached, psi(t0) counted as 0 inside a wall */
         double psi0 = psi(s, w, F.t0, s->y0s);
         double rate0 = fabs(psi0) <= s->tol_psi ? normal_rate(s, w, F.t0, s->y0s) : 0.0;
-        F.divided[F.nf] = fabs(psi0) <= s->tol_psi && rate0 > 0 && !s->grazing[w];
+        /* a wall just released is searched through psi + tol_psi until the body leaves the
+           band (hybrid._Run.detect) */
+        F.band[F.nf] = s->banded[w];
+        double g0 = F.band[F.nf] ? psi0 + s->tol_psi : psi0;
+        F.divided[F.nf] = !F.band[F.nf] && fabs(psi0) <= s->tol_psi && rate0 > 0 && !s->grazing[w];
         if (s->grazing[w]) F.start[F.nf] = -1.0; /* grazed, not left since: inside */
         else if (F.divided[F.nf]) F.start[F.nf] = rate0;
-        else if (psi0 < 0) F.start[F.nf] = 0.0 * psi0;
-        else F.start[F.nf] = psi0;
+        else if (g0 < 0) F.start[F.nf] = 0.0 * g0;
+        else F.start[F.nf] = g0;
         F.nf++;
     }
     if (s->mode >= 0) {
         F.wall[F.nf] = s->mode;
         F.release[F.nf] = 1;
         F.divided[F.nf] = 0;
+        F.band[F.nf] = 0;
         F.start[F.nf] = normal_force(s, s->mode, F.t0, s->y0s, s->y0s + NQ);
         F.nf++;
     }
@@ -992,6 +999,7 @@ static int at_wall(sim_t *s, int w)
 {
     double r = normal_rate(s, w, s->t, s->y);
     s->grazing[w] = 0;
+    s->banded[w] = 0;
     if (r >= -tol_v(s, s->y)) {
         /* reached tangentially: a resting contact if the wall must (or may) hold the body
            while it still creeps in (lambda_N >= 0), else a grazing touch */
@@ -1064,8 +1072,10 @@ static int run(sim_t *s)
             s->t = s->st1;
             memcpy(s->y, y1, sizeof y1);
             record(s);
-            for (int w = 0; w < NW; ++w)
+            for (int w = 0; w < NW; ++w) {
                 if (s->grazing[w] && psi(s, w, s->t, s->y) >= 0) s->grazing[w] = 0;
+                if (s->banded[w] && psi(s, w, s->t, s->y) > s->tol_psi) s->banded[w] = 0;
+            }
             track_energy(s);
             if (s->status != ST_RUNNING) return 0;
             continue;
@@ -1077,6 +1087,7 @@ static int run(sim_t *s)
         if (release) {
             if (event(s, K_RELEASE, wall, s->y, s->y, 0.0)) return 0;
             s->mode = -1;
+            s->banded[wall] = 1;
         } else if (at_wall(s, wall)) {
             return 0;
         }
@@ -1160,7 +1171,7 @@ void symmech_bouncing_ball_sim_begin(void *p, double t0, const double *y0)
     s->condition = 1.0;
     s->steps = s->rejected = s->nfev = s->events = 0;
     s->tol_psi = 10 * s->atol;
-    for (int w = 0; w < NW; ++w) s->grazing[w] = 0;
+    for (int w = 0; w < NW; ++w) s->grazing[w] = s->banded[w] = 0;
     s->nrec = s->nseg = s->nev = 0;
     s->energy0 = energy(s, t0, s->y, s->y + NQ);
 }
