@@ -135,7 +135,7 @@ def _bench(args: argparse.Namespace, say: Callable) -> int:
         case,
         routes=routes,
         tolerances=tolerances,
-        repeats=args.repeats,  # type: ignore[arg-type]
+        repeats=args.repeats,
         baseline=not args.no_baseline,
     )
     _print(wp.format_table(case, ref, table))

@@ -36,7 +36,7 @@ from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
 from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
 from symmech.simulate.hybrid import COND_LIMIT, Options
-from symmech.simulate.steppers import c_tableau, stepper
+from symmech.simulate.steppers import ExplicitRK, c_tableau, stepper
 from symmech.simulate.system import Functions, HybridSystem, SimulationError, contact_rows
 
 __all__ = [
@@ -58,8 +58,16 @@ _STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed"}
 _R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL, _R_COND = range(1, 11)
 #: info[0] and info[1] of a run that reached t_end: every other row needs :func:`decode`
 FINISHED_CODE, REACHED_END_CODE = 1, _R_END
-_FUNCTIONS = ("psi", "dpsi", "psi_t", "impact", "energy", "projector_P", "constraint_residual")
-_FUNCTIONS += ("multipliers",)
+_FUNCTIONS: tuple[str, ...] = (
+    "psi",
+    "dpsi",
+    "psi_t",
+    "impact",
+    "energy",
+    "projector_P",
+    "constraint_residual",
+    "multipliers",
+)
 _WALL_KINDS = ("psi", "dpsi", "psi_t", "impact")
 _TEMPLATE = "c/simulator.c.jinja"
 
@@ -217,6 +225,7 @@ def _tableaux() -> list[dict[str, Any]]:
     for kind_name in C_METHODS:
         tab = c_tableau(kind_name)
         st = stepper(kind_name)
+        assert isinstance(st, ExplicitRK)  # C_METHODS are explicit
         name = f"m_{kind_name}"
         extra = [(k, [repr(v) for v in tab[k]]) for k in tab if k not in ("c", "a", "b")]
         refs = [
@@ -405,7 +414,7 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
             f"accumulation of impacts (t* ~ {d[1]!r})",
             "initial state at rest on the wall",
         )[sub]
-        why_text = (
+        why_rest = (
             "contact=stop",
             "the wall moves",
             "contact with two walls at once is not supported",
@@ -413,7 +422,7 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
         return (
             status,
             f"the body comes to rest on wall {names[wall]!r} at t = {d[0]!r}"
-            f" ({reason_text}); stopped: {why_text[why]}",
+            f" ({reason_text}); stopped: {why_rest[why]}",
             d[0],
         )
     if reason == _R_RHS:

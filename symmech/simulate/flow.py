@@ -228,7 +228,11 @@ class ScipyFlow:
         # (LSODA exposes none: twice its last step, which it cuts back if need be)
         self.h = getattr(s, "h_abs", None) or 2 * s.step_size or self.h
         dense = s.dense_output()
-        return Segment(t0, float(s.t), y0, s.y.copy(), None, lambda tt, _d=dense: _d(tt))
+
+        def continuous(tt: float) -> np.ndarray:
+            return dense(tt)
+
+        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous)
 
     def limit_step(self, h: float) -> None:
         """As :meth:`RKFlow.limit_step` (the next solver's first step)."""

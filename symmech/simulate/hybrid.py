@@ -81,7 +81,8 @@ class Options:
 
 
 class Flow(Protocol):
-    stats: Any
+    @property
+    def stats(self) -> Any: ...
 
     def start(self, t: float, y: np.ndarray, t_bound: float) -> None: ...
     def advance(self) -> Segment: ...
@@ -221,7 +222,8 @@ class _Run:
         # through psi itself.  A start inside a wall (psi(t0) < 0, unless the body grazed
         # it and has not left it since) counts as psi(t0) = 0: a further dip is an event
         # at once, never a tunnel.
-        divided, start = [], []
+        divided: list[bool] = []
+        start: list[float | None] = []
         for w, what in funcs:
             if what != "wall":
                 divided.append(False)
@@ -253,7 +255,8 @@ class _Run:
             return psi / (t - t0) if divided[i] else psi
 
         def start_value(i: int) -> float:
-            return value(i, t0, seg.y0) if start[i] is None else start[i]
+            s = start[i]
+            return value(i, t0, seg.y0) if s is None else s
 
         self._event_values = [(lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))]
 
@@ -427,7 +430,7 @@ class _Run:
                 if self.o.contact == "stop"
                 else "the wall moves (no contact mode for a moving wall)"
                 if self.f.moving[wall]
-                else f"already in contact with {self.names[self.mode]!r}"  # type: ignore[index]
+                else f"already in contact with {self.names[self.mode]!r}"
             )
             raise _Stop(
                 "zeno",

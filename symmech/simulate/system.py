@@ -149,12 +149,14 @@ def check_parameters(scene: Scene, params: object) -> dict[str, float]:
     """``params`` as ``{name: value}``, every scene parameter given, finite, and with the
     sign its symbol declares (positive, nonnegative) and restitutions in [0, 1]."""
     rules = _rules(scene)
-    plain = type(params) is dict and all(type(x) is float for x in params.values())
-    if plain and rules.last and rules.last[0][0] == params:
+    plain = None
+    if type(params) is dict and all(type(x) is float for x in params.values()):
+        plain = params
+    if plain is not None and rules.last and rules.last[0][0] == plain:
         return dict(rules.last[0][1])
     out = _checked_parameters(rules, params)
-    if plain:
-        rules.last[:] = [(dict(params), dict(out))]  # type: ignore[arg-type]
+    if plain is not None:
+        rules.last[:] = [(dict(plain), dict(out))]
     return out
 
 

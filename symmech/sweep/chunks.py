@@ -172,10 +172,10 @@ def _psi_checks(
                         psi[k] = float(free.psi(Q[i], p, wall=w, t=t0))
                     except NumericalError as exc:
                         out[int(i)] = str(exc)
-            for k in np.flatnonzero(psi < -10 * plan.options.atol):
+            for kk in np.flatnonzero(psi < -10 * plan.options.atol):
                 out.setdefault(
-                    int(live[k]),
-                    f"q0 is on the wrong side of wall {wall.name!r}: psi = {float(psi[k])!r} < 0",
+                    int(live[kk]),
+                    f"q0 is on the wrong side of wall {wall.name!r}: psi = {float(psi[kk])!r} < 0",
                 )
     return out
 
@@ -325,9 +325,9 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
         # a run that reached t_end decodes to ("finished", "reached t_end = ...", None):
         # only the others are decoded one by one
         status[sent] = "finished"
-        for k in np.flatnonzero((info[:, 0] != _FINISHED) | (info[:, 1] != _REACHED_END)):
-            st, msg, acc = decode(info[k], walls, plan.options.t_end)
-            i = sent[k]
+        for row in np.flatnonzero((info[:, 0] != _FINISHED) | (info[:, 1] != _REACHED_END)):
+            st, msg, acc = decode(info[row], walls, plan.options.t_end)
+            i = sent[row]
             status[i] = st
             message[i] = None if st == "finished" else msg
             rest[i] = np.nan if acc is None else acc
@@ -336,8 +336,8 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
         v[sent] = info[:, INFO_HEAD + n : INFO_HEAD + 2 * n]
         counts[sent] = info[:, 17:21].astype(np.int64)
         steps[sent] = info[:, 11].astype(np.int64)
-        for k, j in INFO_OUTPUTS.items():
-            stats[k][sent] = info[:, j]
+        for key, j in INFO_OUTPUTS.items():
+            stats[key][sent] = info[:, j]
         if not plan.energy_conserved:
             stats["energy_drift"][sent] = np.nan
     cols: dict[str, Any] = {"run": np.arange(prep.lo, prep.hi, dtype=np.int64)}
