@@ -17,6 +17,11 @@ Format (version 1)
     metric = ["m", "m", "m*k**2"]                # n entries: the diagonal; or n rows of n
     # kinetic_energy = "m*(xdot**2 + ydot**2)/2 + m*k**2*thetadot**2/2"   (instead of metric)
     potential = "m*g*y"                          # optional, default 0; may use t
+    forces = ["-c*xdot + u", "0", "0"]           # optional: applied generalized forces, one
+                                                 # per velocity (in the quasi-velocities'
+                                                 # basis with a [frame]); may use t and the
+                                                 # velocities; u = {} in [functions] is a
+                                                 # run-time input u(t)
     constraints = ["xdot - R*thetadot"]          # optional; linear in the velocities,
                                                  # or coefficient rows [[1, 0, "-R"]]
 
@@ -53,7 +58,7 @@ Rules:
   expression is refused (Python would drop the rest as a comment), and so is a name
   written with look-alike Unicode characters (``𝐱`` for ``x``); a line break is
   whitespace, so an expression may span the lines of a multi-line string.  Where a name
-  may appear (only the potential and walls may use ``t``, ...) is checked by
+  may appear (only the potential, forces and walls may use ``t``, ...) is checked by
   :class:`~symmech.Scene`.  With a ``[frame]``, velocities are written in the
   quasi-velocities only (the kinetic energy and the constraints are in that basis).
 * Parameters are positive unless ``sign`` says otherwise: ``"positive"``,
@@ -196,6 +201,7 @@ _TOP_KEYS = (
     "metric",
     "kinetic_energy",
     "potential",
+    "forces",
     "constraints",
     "parameters",
     "functions",
@@ -1280,6 +1286,28 @@ class _Loader:
                 out.append(expr)  # type: ignore[arg-type]
         return out if ok else None
 
+    def force_list(self, raw: object, n: int) -> list[sp.Expr] | None:
+        """``forces``: n expressions (absent: None, no applied forces)."""
+        if raw is None:
+            return None
+        line = self.line(None, "forces")
+        self.field_lines["forces"] = line
+        if not isinstance(raw, list) or len(raw) != n:
+            got = f"{len(raw)} entries" if isinstance(raw, list) else _toml_type(raw)
+            self.fail(
+                f"expected an array of {n} expressions (one generalized force per velocity),"
+                f" got {got}",
+                "forces",
+                line,
+            )
+            return None
+        out = []
+        for k, e in enumerate(raw):
+            at = self.loc.element(line, e)
+            self.field_lines[f"forces[{k}]"] = at
+            out.append(self.expression(e, f"forces[{k}]", at, self.table))
+        return None if any(e is None for e in out) else out  # type: ignore[return-value]
+
     def walls(self, n: int) -> list[Wall]:
         raw = self.data.get("walls", [])
         if not isinstance(raw, list) or not all(isinstance(w, dict) for w in raw):
@@ -1445,6 +1473,7 @@ class _Loader:
         pline = self.line(None, "potential")
         self.field_lines["potential"] = pline
         potential = self.expression(data.get("potential", 0), "potential", pline, self.table)
+        forces = self.force_list(data.get("forces"), n)
         cline = self.line(None, "constraints")
         self.field_lines["constraints"] = cline
         constraints = self.constraint_list(data.get("constraints", []), n, "constraints", cline)
@@ -1465,6 +1494,7 @@ class _Loader:
                 metric=metric,
                 kinetic_energy=kinetic,
                 potential=potential if potential is not None else 0,
+                forces=forces,
                 constraints=constraints or [],
                 frame=S,
                 quasi_velocities=v,
@@ -1493,7 +1523,8 @@ class _Loader:
                     return key, self.field_lines[key], _after_field(problem, m.end())
             return base, None, _after_field(problem, m.end())
         m = re.match(
-            r"(constraints)(\[\d+\])?|(metric|kinetic_energy|potential|frame|walls)\b", problem
+            r"(constraints|forces)(\[\d+\])?|(metric|kinetic_energy|potential|frame|walls)\b",
+            problem,
         )
         if m:
             key = m.group(0)
@@ -1804,6 +1835,7 @@ def dump_scene(
     everything = [
         *decl.metric,
         decl.potential,
+        *decl.forces,
         *decl.constraint_matrix,
         *(decl.frame if decl.frame is not None else []),
     ]
@@ -1820,6 +1852,9 @@ def dump_scene(
     lines.append("metric = " + _matrix_toml(decl.metric, "metric", table))
     if decl.potential != 0:
         lines.append("potential = " + _toml_value(decl.potential, "potential", table))
+    if any(e != 0 for e in decl.forces):
+        forces = [_toml_value(e, f"forces[{k}]", table) for k, e in enumerate(decl.forces)]
+        lines.append("forces = [" + ", ".join(forces) + "]")
     if decl.m:
         cons = [
             _toml_value(

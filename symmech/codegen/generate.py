@@ -212,7 +212,7 @@ def _parameter_rules(scene: Scene, plan: ScenePlan) -> tuple[ParameterRule, ...]
                 f"constants: {symbol} = {value} is the restitution of wall"
                 f" {', '.join(map(repr, restitutions[symbol]))}: it must lie in [0, 1]"
             )
-    return parameter_rules(plan.parameters, restitutions)
+    return parameter_rules(plan.parameters, restitutions, scene.declaration.assumed_positive)
 
 
 def _argument_notes(plan: ScenePlan, lowered: Sequence[LoweredFunction]) -> list[str]:

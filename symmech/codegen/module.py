@@ -83,7 +83,11 @@ class SceneModule:
         self.n = plan.n
         self.m = plan.m
         self.parameters = tuple(str(p) for p in plan.parameters)
-        self.inputs = tuple(str(a) for _, a in plan.inputs)
+        #: Names of the run-time inputs, in slot order: ``f`` for ``f(t)``, ``f'`` for its
+        #: derivative (``f''`` ...); ``inputs=`` takes a sequence in this order or a mapping
+        #: from these names (or from the sympy objects, or their ``str``).
+        self.inputs = tuple(input_name(a) for _, a in plan.inputs)
+        self._input_aliases = {str(a): input_name(a) for _, a in plan.inputs}
         self.walls = plan.walls
         self._raw = dict(raw)
         self._fast = dict(fast or {})
@@ -123,29 +127,7 @@ class SceneModule:
         if params is None:
             raise CodegenError(f"params required: {list(self.parameters)}")
         if isinstance(params, Mapping):
-            values: dict[str, object] = {}
-            for key, val in params.items():
-                name = key.name if isinstance(key, sp.Symbol) else key
-                if not isinstance(name, str):
-                    raise CodegenError(f"params: key {key!r} is not a parameter name")
-                if name in values:
-                    raise CodegenError(f"params: {name!r} is given twice")
-                values[name] = val
-            missing = [p for p in self.parameters if p not in values]
-            extra = sorted(set(values) - set(self.parameters))
-            if missing or extra:
-                raise CodegenError(
-                    f"params: missing {missing}, unknown {extra}; expected {list(self.parameters)}"
-                )
-            columns = [real_array(values[p], f"params[{p!r}]") for p in self.parameters]
-            try:
-                columns = list(np.broadcast_arrays(*columns))
-            except ValueError:
-                shapes = {p: c.shape for p, c in zip(self.parameters, columns, strict=True)}
-                raise CodegenError(
-                    f"params: the values' shapes do not broadcast: {shapes}"
-                ) from None
-            p = np.stack(columns, axis=-1)
+            p = _named_columns(params, self.parameters, {}, "params")
         else:
             p = real_array(params, "params")
         if p.shape[-1:] != (k,):
@@ -154,6 +136,19 @@ class SceneModule:
             )
         check_parameters(self._rules, p, NumericalError, "params")
         return np.ascontiguousarray(p)
+
+    def _inputs(self, inputs: object) -> np.ndarray:
+        """The inputs u as float64 (..., k): a sequence in :attr:`inputs` order or a mapping
+        from their names."""
+        if isinstance(inputs, Mapping):
+            if not self.inputs:
+                if inputs:
+                    raise CodegenError(
+                        f"scene {self.code.scene_name!r} has no run-time inputs; got {inputs!r}"
+                    )
+                return np.zeros(0)
+            return _named_columns(inputs, self.inputs, self._input_aliases, "inputs")
+        return self._state(inputs, len(self.inputs), "inputs")
 
     def _state(self, value: object, size: int, what: str) -> np.ndarray:
         a = real_array(value, what)
@@ -175,7 +170,7 @@ class SceneModule:
         if spec.takes_inputs and inputs is None:
             raise CodegenError(f"{name} needs the inputs u = {list(self.inputs)}: pass inputs=")
         # t and the inputs are checked when given, even to a function that does not read them
-        u = None if inputs is None else self._state(inputs, len(self.inputs), "inputs")
+        u = None if inputs is None else self._inputs(inputs)
         tt = None if t is None else real_array(t, "t")
         u = u if spec.takes_inputs else None
         tt = tt if spec.takes_time else None
@@ -295,6 +290,53 @@ class SceneModule:
         """The post-impact velocity v+ at a wall for the pre-impact velocity v."""
         name = self._wall_function("impact", wall)
         return self.call(name, q, v, params=params, t=t, inputs=inputs)
+
+
+def input_name(atom: sp.Basic) -> str:
+    """The name of a run-time input: ``f`` for ``f(t)``, ``f'`` for ``Derivative(f(t), t)``,
+    ``f''`` for the second derivative."""
+    if isinstance(atom, sp.Derivative):
+        return input_name(atom.expr) + "'" * int(atom.derivative_count)
+    if isinstance(atom, sp.Function | sp.core.function.AppliedUndef):
+        return str(atom.func)
+    return str(atom)
+
+
+def _key_name(key: object, aliases: Mapping[str, str], what: str) -> str:
+    """The name a mapping key stands for: a string, a Symbol, or an input's sympy object."""
+    if isinstance(key, sp.Symbol):
+        name = key.name
+    elif isinstance(key, sp.Basic):
+        name = str(key)
+    elif isinstance(key, str):
+        name = key
+    else:
+        raise CodegenError(f"{what}: key {key!r} is not a name")
+    return aliases.get(name, name)
+
+
+def _named_columns(
+    values: Mapping, names: Sequence[str], aliases: Mapping[str, str], what: str
+) -> np.ndarray:
+    """``{name: array}`` as one float64 array (..., len(names)) in the order of ``names``;
+    the arrays broadcast against each other."""
+    given: dict[str, object] = {}
+    for key, val in values.items():
+        name = _key_name(key, aliases, what)
+        if name in given:
+            raise CodegenError(f"{what}: {name!r} is given twice")
+        given[name] = val
+    missing = [p for p in names if p not in given]
+    extra = sorted(set(given) - set(names))
+    if missing or extra:
+        raise CodegenError(f"{what}: missing {missing}, unknown {extra}; expected {list(names)}")
+    columns = [real_array(given[p], f"{what}[{p!r}]") for p in names]
+    try:
+        columns = list(np.broadcast_arrays(*columns))
+    except ValueError:
+        shapes = {p: c.shape for p, c in zip(names, columns, strict=True)}
+        raise CodegenError(f"{what}: the values' shapes do not broadcast: {shapes}") from None
+    return np.stack(columns, axis=-1)
 
 
 def _import_numpy_module(code: GeneratedCode, folder: Path):

@@ -124,10 +124,14 @@ def _c_float(x: float) -> str:
 
 
 def parameter_rules(
-    parameters: Sequence[sp.Symbol], restitutions: Mapping[sp.Symbol, Sequence[str]]
+    parameters: Sequence[sp.Symbol],
+    restitutions: Mapping[sp.Symbol, Sequence[str]],
+    assumed_positive: Sequence[sp.Symbol] = (),
 ) -> tuple[ParameterRule, ...]:
-    """One rule per run-time parameter (module docstring): its sign from its assumptions,
-    and [0, 1] if it is the restitution of the walls named in ``restitutions[p]``."""
+    """One rule per run-time parameter (module docstring): its sign from its assumptions
+    (or positive when the declaration assumed it, ``assumed_positive``: a parameter without a
+    sign that the metric needs positive), and [0, 1] if it is the restitution of the walls
+    named in ``restitutions[p]``."""
     rules = []
     for i, p in enumerate(parameters):
         lower: float | None = None
@@ -137,6 +141,9 @@ def parameter_rules(
         why: list[str] = []
         if p.is_positive:
             lower, closed_lower, why = 0.0, False, ["declared positive"]
+        elif p in assumed_positive:
+            lower, closed_lower = 0.0, False
+            why = ["declared without a sign; the metric is positive definite only for it > 0"]
         elif p.is_nonnegative:
             lower, why = 0.0, ["declared nonnegative"]
         elif p.is_negative:

@@ -233,8 +233,8 @@ class SymbolRules:
         if velocities and f.in_velocities and self.has_frame:
             problems.add(
                 f"{f.label}: contains the coordinate velocities {_names(velocities)}; in a scene"
-                " with a frame the kinetic energy, constraints and impulsive constraints are"
-                f" written in the quasi-velocities {_names(self.v)} (q_dot = S v)"
+                " with a frame the kinetic energy, forces, constraints and impulsive constraints"
+                f" are written in the quasi-velocities {_names(self.v)} (q_dot = S v)"
             )
             bad = True
         elif velocities and f.label.endswith(".psi"):
@@ -250,7 +250,7 @@ class SymbolRules:
             )
             bad = True
         if TIME in sset and TIME not in f.allowed:
-            problems.add(f"{f.label}: depends on time t; only the potential and walls may")
+            problems.add(f"{f.label}: depends on time t; only the potential, forces and walls may")
             bad = True
         coords = sset & self.q_set - f.allowed
         if coords:

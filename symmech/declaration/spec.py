@@ -73,7 +73,6 @@ from symmech.declaration.checks import (
     assumptions,
     check_frame,
     check_independent,
-    check_metric,
     check_real,
     check_wall_gradient,
     constraint_row,
@@ -81,10 +80,13 @@ from symmech.declaration.checks import (
     metric_of_kinetic_energy,
     short,
 )
+from symmech.declaration.dynamic import dynamic_translation
 from symmech.declaration.expressions import to_expression
+from symmech.declaration.forces import forces_field
 from symmech.declaration.sampling import atom_key
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.symbols import velocity_of
+from symmech.declaration.unsigned import check_metric_signs
 from symmech.declaration.wall import Wall
 from symmech.errors import SceneError
 
@@ -131,11 +133,18 @@ class Declaration:
     frame: sp.ImmutableMatrix | None  # q_dot = frame * velocities; None means identity
     metric: sp.ImmutableMatrix
     potential: sp.Expr
+    forces: sp.ImmutableMatrix  # n x 1 applied generalized forces, velocity basis
     constraint_matrix: sp.ImmutableMatrix  # m x n
     walls: tuple[ResolvedWall, ...]
     parameters: tuple[sp.Symbol, ...]
     name: str
     kinetic_energy_given: bool
+    #: parameters without a sign assumption that the metric's positive definiteness needs
+    #: positive (see :mod:`symmech.declaration.unsigned`); generated code checks them at run time
+    assumed_positive: tuple[sp.Symbol, ...] = ()
+    #: positive definite only for some values of parameters declared without a sign:
+    #: generated code checks it at run time (its Cholesky factorisation of g)
+    metric_checked_at_run_time: bool = False
 
     @property
     def n(self) -> int:
@@ -165,6 +174,7 @@ def declare(
     metric: object = None,
     kinetic_energy: object = None,
     potential: object = 0,
+    forces: object = None,
     constraints: Iterable = (),
     frame: object = None,
     quasi_velocities: Sequence[sp.Symbol] | None = None,
@@ -178,12 +188,33 @@ def declare(
     docstring for the rules).  See :class:`symmech.Scene` for the meaning of the arguments.
     """
     problems = Problems()
+    constraint_items = _items(constraints)
+    forces = _listed(forces)
+    walls = _listed(walls)
+    dyn = dynamic_translation(
+        coordinates,
+        quasi_velocities,
+        (metric, kinetic_energy, potential, forces, frame, constraint_items, walls),
+    )
+    if dyn is not None:
+        coordinates, quasi_velocities = dyn.coordinates, dyn.quasi_velocities
+        metric = dyn.expr(metric, "metric")
+        kinetic_energy = dyn.expr(kinetic_energy, "kinetic_energy")
+        potential = dyn.expr(potential, "potential")
+        forces = dyn.expr(forces, "forces")
+        frame = dyn.expr(frame, "frame")
+        constraint_items = [
+            dyn.expr(c, f"constraints[{a}]") for a, c in enumerate(constraint_items)
+        ]
+        if isinstance(walls, Wall):
+            walls = [walls]
+        if isinstance(walls, list | tuple):
+            walls = [dyn.wall(w, f"walls[{k}]") for k, w in enumerate(walls)]
 
     # -- stage 1: structure ----------------------------------------------------------------
     q = _coordinate_symbols(coordinates)
     n = len(q)
     qd = tuple(velocity_of(c) for c in q)
-    constraint_items = _items(constraints)
     wall_list = _wall_items(walls, problems)
     v = _velocity_basis(frame, quasi_velocities, q, qd, problems)
     basis_ok = v is not None
@@ -202,7 +233,7 @@ def declare(
     # or found in the sympy-valued inputs)
     table: dict[str, sp.Basic] = {name_: r.symbol for name_, r in reserved.items()}
     if explicit is None:
-        found = _sympy_symbols(metric, kinetic_energy, potential, frame, constraint_items)
+        found = _sympy_symbols(metric, kinetic_energy, potential, frame, constraint_items, forces)
         for w in wall_list:
             if isinstance(w, Wall):
                 found |= _sympy_symbols(w.psi, w.impulsive_constraints, w.restitution)
@@ -245,6 +276,9 @@ def declare(
     potential_field = None
     if V is not None:
         fields.append(potential_field := Field("potential", V, q_set | t_set))
+    force_field = forces_field(forces, n, q_set | v_set | t_set, expr, problems)
+    if force_field is not None:
+        fields.append(force_field)
     constraint_fields = [
         _velocity_form_field(c, f"constraints[{a}]", n, q_set, v_set, expr, problems)
         for a, c in enumerate(constraint_items)
@@ -282,15 +316,22 @@ def declare(
     points = Points([*q, *params, TIME])
     if frame_field is not None and frame_field.ok:
         check_frame(S, points, problems)
+    assumed: tuple[sp.Symbol, ...] | None = None
     if metric_field is not None and metric_field.ok and G is not None:
-        check_metric(G, "metric", points, problems, q)
+        assumed = check_metric_signs(G, "metric", points, problems, q, params)
     elif metric_field is not None and metric_field.ok and T is not None and basis_ok:
         G = metric_of_kinetic_energy(T, v, q, problems)
         if G is not None:
-            check_metric(G, "kinetic_energy (its metric, the Hessian of T)", points, problems, q, T)
+            label = "kinetic_energy (its metric, the Hessian of T)"
+            assumed = check_metric_signs(G, label, points, problems, q, params, T)
 
     if potential_field is not None and potential_field.ok:
         check_real(V, "potential", points, problems)
+    F = sp.zeros(n, 1)
+    if force_field is not None and force_field.ok:
+        F = force_field.value
+        for k, e in enumerate(F):
+            check_real(e, f"forces[{k}]", points, problems)
 
     rows = [
         constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
@@ -349,11 +390,14 @@ def declare(
         frame=sp.ImmutableMatrix(S) if S is not None else None,
         metric=sp.ImmutableMatrix(G),
         potential=sp.sympify(V),
+        forces=sp.ImmutableMatrix(F),
         constraint_matrix=sp.ImmutableMatrix(mu),
         walls=walls_out,
         parameters=tuple(params),
         name=name or "scene",
         kinetic_energy_given=T is not None,
+        assumed_positive=assumed or (),
+        metric_checked_at_run_time=assumed is not None,
     )
 
 
@@ -494,6 +538,16 @@ def _items(constraints: object) -> list[object]:
         return list(constraints)
     except TypeError:
         return [constraints]
+
+
+def _listed(value: object) -> object:
+    """A one-shot iterable read into a list (so it can be read twice); else unchanged."""
+    if value is None or isinstance(value, (str, bytes, sp.Basic, sp.MatrixBase, list, tuple)):
+        return value
+    try:
+        return list(value)  # type: ignore[call-overload]
+    except TypeError:
+        return value
 
 
 def _wall_items(walls: object, problems: Problems) -> list[object]:

@@ -57,7 +57,7 @@ class MpFunctions:
         self.wall_names = tuple(w.name for w in scene.walls)
         self.constrained = scene.is_constrained
         self.moving = tuple(TIME in w.psi.free_symbols for w in scene.walls)
-        self.energy_conserved = TIME not in sp.sympify(scene.potential).free_symbols
+        self.energy_conserved = scene.conservative
         self.mode: int | None = None
         self.eps = mpmath.eps
         self._values = {

@@ -89,6 +89,7 @@ def contact_scene(scene: Scene, wall: int) -> Scene | None:
         decl.coordinates,
         metric=decl.metric,
         potential=decl.potential,
+        forces=decl.forces,
         constraints=rows,
         frame=decl.frame,
         quasi_velocities=decl.velocities if decl.frame is not None else None,
@@ -137,7 +138,7 @@ def _rules(scene: Scene) -> _ParameterRules:
             restitutions.append((w.name, str(w.restitution), fn))
         rules = _ParameterRules(
             tuple(str(p) for p in params),
-            tuple(bool(p.is_positive) for p in params),
+            tuple(bool(p.is_positive) or p in scene.declaration.assumed_positive for p in params),
             tuple(bool(p.is_nonnegative) for p in params),
             tuple(restitutions),
         )
@@ -183,7 +184,10 @@ def _checked_parameters(rules: _ParameterRules, params: object) -> dict[str, flo
     for name, pos, nonneg in zip(names, rules.positive, rules.nonnegative, strict=True):
         x = out[name]
         if pos and not x > 0:
-            raise SimulationError(f"params[{name!r}] is declared positive, got {x!r}")
+            raise SimulationError(
+                f"params[{name!r}] is declared positive (or, declared without a sign, the"
+                f" metric needs it positive), got {x!r}"
+            )
         if nonneg and not x >= 0:
             raise SimulationError(f"params[{name!r}] is declared non-negative, got {x!r}")
     values = [out[n] for n in names]
@@ -270,9 +274,9 @@ class HybridSystem:
 
     @property
     def energy_conserved(self) -> bool:
-        """The flow conserves T + V: the potential does not depend on t."""
+        """The flow conserves T + V: no applied forces, the potential does not depend on t."""
         if self._conserved is None:
-            self._conserved = TIME not in sp.sympify(self.scene.potential).free_symbols
+            self._conserved = self.scene.conservative
         return self._conserved
 
     def has_contact_mode(self, wall: int) -> bool:
