@@ -32,6 +32,7 @@ from symmech.geometry.connection import (
 from symmech.geometry.lie import commutation_coefficients
 from symmech.geometry.simplification import Level, check_level, tidy_matrix
 from symmech.impacts import ImpactMap, derive_impact_map
+from symmech.mechanics import scene_arguments
 
 __all__ = ["Scene"]
 
@@ -67,6 +68,12 @@ class Scene:
         the velocities (:func:`symmech.velocities`, or the quasi-velocities).
     potential:
         V(q) (may depend on :data:`symmech.t`); default 0.
+    forces:
+        Applied generalized forces F (n entries, one per velocity of the basis), the
+        non-potential loads: damping, friction, motors, inputs ``tau(t)``.  They may depend on
+        q, the velocities, t and undefined functions of t; with a frame they are Kane's
+        generalized active forces ``F = S^T Q`` (see :mod:`symmech.declaration.forces`).
+        Default: none.
     constraints:
         Linear velocity constraints: expressions linear in the velocities, or coefficient
         rows.
@@ -103,6 +110,7 @@ class Scene:
         metric: Any = None,
         kinetic_energy: Any = None,
         potential: Any = 0,
+        forces: Any = None,
         constraints: Iterable = (),
         frame: Any = None,
         quasi_velocities: Sequence[sp.Symbol] | None = None,
@@ -115,6 +123,7 @@ class Scene:
             metric=metric,
             kinetic_energy=kinetic_energy,
             potential=potential,
+            forces=forces,
             constraints=constraints,
             frame=frame,
             quasi_velocities=quasi_velocities,
@@ -124,6 +133,22 @@ class Scene:
         )
         object.__setattr__(self, "_decl", decl)
         object.__setattr__(self, "_Scene__derived", {})
+
+    @classmethod
+    def from_mechanics(
+        cls, model: object, *, walls: Iterable[Wall] = (), name: str | None = None
+    ) -> Scene:
+        """The Scene of a ``sympy.physics.mechanics`` model: a ``KanesMethod``,
+        ``LagrangesMethod`` or ``System`` with its bodies and loads (see
+        :mod:`symmech.mechanics.convert` for how each part is read).  ``walls`` may be
+        written in the model's dynamic symbols.
+
+        Kane's generalized speeds become the quasi-velocities (``q_dot = S(q) u`` from the
+        kinematic differential equations), velocity constraints and differentiated
+        holonomic constraints the constraints, constant forces the potential (when they
+        derive from one), every other load an applied force.
+        """
+        return cls(**scene_arguments(model, walls=list(walls), name=name))
 
     # -- immutability -----------------------------------------------------------------
     def __setattr__(self, key: str, value: object) -> None:
@@ -187,6 +212,18 @@ class Scene:
         return self._decl.potential
 
     @property
+    def forces(self) -> sp.ImmutableMatrix:
+        """The applied generalized forces F (n x 1, velocity basis; zero when none)."""
+        return self._decl.forces
+
+    @property
+    def conservative(self) -> bool:
+        """True when the flow conserves T + V: no applied forces, V independent of t."""
+        from symmech.declaration.symbols import t
+
+        return t not in self.potential.free_symbols and all(e == 0 for e in self._decl.forces)
+
+    @property
     def constraint_matrix(self) -> sp.ImmutableMatrix:
         """Rows mu^a of the constraint one-forms (m x n, velocity basis): ``mu v = 0``."""
         return self._decl.constraint_matrix
@@ -197,19 +234,31 @@ class Scene:
 
     @property
     def time_dependent(self) -> bool:
-        """True when the potential or a wall depends on :data:`symmech.t`."""
+        """True when the potential, the forces or a wall depend on :data:`symmech.t`."""
         from symmech.declaration.symbols import t
 
-        return t in self.potential.free_symbols or any(w.moving for w in self.walls)
+        return (
+            t in self.potential.free_symbols
+            or t in self._decl.forces.free_symbols
+            or any(w.moving for w in self.walls)
+        )
 
     def __repr__(self) -> str:
         parts = [f"Scene({self.name!r}: q={list(self.coordinates)}"]
         if self.frame is not None:
             parts.append(f"quasi-velocities {list(self.velocities)}")
+        if any(e != 0 for e in self._decl.forces):
+            parts.append("applied forces")
         if self.is_constrained:
             parts.append(f"{self._decl.m} constraints")
         if self.walls:
             parts.append(f"{len(self.walls)} walls")
+        if self._decl.metric_checked_at_run_time:
+            names = ", ".join(p.name for p in self._decl.assumed_positive)
+            parts.append(
+                "metric positive definite for some parameter values only (checked at run"
+                " time" + (f"; {names} > 0" if names else "") + ")"
+            )
         return ", ".join(parts) + ")"
 
     def _repr_latex_(self) -> str:
@@ -227,6 +276,8 @@ class Scene:
         else:
             lines.append(rf"g = {_latex_matrix(self.mass_matrix())}")
         lines.append(rf"V = {lx(self.potential)}")
+        if any(e != 0 for e in self._decl.forces):
+            lines.append(rf"F = {_latex_matrix(self._decl.forces.T)}^T")
         if self.is_constrained:
             lines.append(rf"\mu = {_latex_matrix(self.constraint_matrix)},\quad \mu\,v = 0")
         for w in self.walls:
@@ -316,24 +367,29 @@ class Scene:
         )
 
     def forcing(self) -> sp.ImmutableMatrix:
-        """f(q, v, t) with ``M v_dot = f`` unconstrained: ``f_k = -omega_kij v^i v^j - u_k(V)``.
+        """f(q, v, t) with ``M v_dot = f`` unconstrained:
+        ``f_k = -omega_kij v^i v^j - u_k(V) + F_k``.
 
-        In coordinates ``f = -Gamma_kij q_dot^i q_dot^j - dV/dq^k`` (first kind, no inverse);
-        see :func:`symmech.geometry.connection.forcing`.
+        In coordinates ``f = -Gamma_kij q_dot^i q_dot^j - dV/dq^k + F_k`` (first kind, no
+        inverse; F the applied :attr:`forces`); see
+        :func:`symmech.geometry.connection.forcing`.
         """
-        return self._cached(
-            ("forcing",),
-            lambda: sp.ImmutableMatrix(
-                forcing(
-                    self._decl.metric,
-                    self.potential,
-                    self.coordinates,
-                    self.velocities,
-                    self.frame,
-                    self.commutation_coefficients() if self.frame is not None else None,
-                )
-            ),
-        )
+
+        def build() -> sp.ImmutableMatrix:
+            f = forcing(
+                self._decl.metric,
+                self.potential,
+                self.coordinates,
+                self.velocities,
+                self.frame,
+                self.commutation_coefficients() if self.frame is not None else None,
+            )
+            F = self._decl.forces
+            if any(e != 0 for e in F):
+                f = sp.Matrix([a + b for a, b in zip(f, F, strict=True)])
+            return sp.ImmutableMatrix(f)
+
+        return self._cached(("forcing",), build)
 
     # -- constraints ---------------------------------------------------------------------------
     def gradients(self) -> sp.ImmutableMatrix:
