@@ -240,7 +240,8 @@ class Scene:
         return (
             t in self.potential.free_symbols
             or t in self._decl.forces.free_symbols
-            or any(w.moving for w in self.walls)
+            or any(t in w.psi.free_symbols for w in self.walls)
+            or any(w.velocity is not None and t in w.velocity.free_symbols for w in self.walls)
         )
 
     def __repr__(self) -> str:

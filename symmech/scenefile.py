@@ -47,6 +47,9 @@ Format (version 1)
     restitution = "alpha"        # a number in [0, 1], a string of numbers, or a parameter
     impulsive_constraints = ["xdot - R*thetadot"]   # optional, kept after the impact
     law = "newton"               # or "energy" (text 001, section 3.2)
+    velocity = ["0", "A*omega*cos(omega*t)", "0"]   # optional: the wall's velocity field
+                                 # W(t, q), one component per velocity (default: the
+                                 # metric normal; see symmech.declaration.wallvelocity)
 
 Rules:
 
@@ -211,7 +214,7 @@ _TOP_KEYS = (
 _PARAMETER_KEYS = ("value", "sign", "description")
 _FUNCTION_KEYS = ("expression", "arguments", "real", "description")
 _FRAME_KEYS = ("quasi_velocities", "matrix", "inverse")
-_WALL_KEYS = ("name", "psi", "restitution", "impulsive_constraints", "law")
+_WALL_KEYS = ("name", "psi", "restitution", "impulsive_constraints", "law", "velocity")
 _IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 _MAX_IDENTIFIER = 64
 _SCENES_PACKAGE = "symmech"
@@ -1359,7 +1362,8 @@ class _Loader:
             impulsive = self.constraint_list(
                 spec.get("impulsive_constraints", []), n, f"{label}.impulsive_constraints", iline
             )
-            if psi is None or restitution is None or impulsive is None:
+            velocity = self.wall_velocity(spec.get("velocity"), n, label, k)
+            if psi is None or restitution is None or impulsive is None or velocity is False:
                 continue
             try:
                 walls.append(
@@ -1369,12 +1373,36 @@ class _Loader:
                         impulsive_constraints=impulsive,
                         name=name,
                         law=law,
+                        velocity=velocity,
                     )
                 )
             except SceneError as exc:
                 for problem in exc.problems:
                     self.fail(problem, label, wline)
         return walls
+
+    def wall_velocity(self, raw: object, n: int, label: str, k: int) -> list | bool | None:
+        """``walls[k].velocity``: n expressions in t, q and the parameters; None when absent,
+        False when refused (the problem is recorded)."""
+        if raw is None:
+            return None
+        field_name = f"{label}.velocity"
+        line = self.line("walls", "velocity", k)
+        self.field_lines[field_name] = line
+        if not isinstance(raw, list) or len(raw) != n:
+            got = f"{len(raw)} entries" if isinstance(raw, list) else _toml_type(raw)
+            self.fail(
+                f"expected an array of {n} expressions (one component per velocity), got {got}",
+                field_name,
+                line,
+            )
+            return False
+        table = {k_: e for k_, e in self.table.items() if e not in self.velocity_like}
+        out = [
+            self.expression(e, f"{field_name}[{j}]", self.loc.element(line, e), table)
+            for j, e in enumerate(raw)
+        ]
+        return False if any(e is None for e in out) else out
 
     def restitution(self, raw: object, label: str, k: int) -> sp.Expr | None:
         field_name = f"{label}.restitution"
@@ -1840,7 +1868,7 @@ def dump_scene(
         *(decl.frame if decl.frame is not None else []),
     ]
     for w in decl.walls:
-        everything.extend([w.psi, *w.impulsive_matrix])
+        everything.extend([w.psi, *w.impulsive_matrix, *(w.velocity or [])])
     arguments = (TIME, *q)
     for e in everything:
         for f in sorted(sp.sympify(e).atoms(AppliedUndef), key=sp.default_sort_key):
@@ -1943,6 +1971,11 @@ def dump_scene(
             lines.append("impulsive_constraints = [" + ", ".join(nus) + "]")
         if w.law != "newton":
             lines.append(f"law = {_toml_string(w.law)}")
+        if w.velocity is not None:
+            comps = [
+                _toml_value(c, f"{label}.velocity[{j}]", table) for j, c in enumerate(w.velocity)
+            ]
+            lines.append("velocity = [" + ", ".join(comps) + "]")
     return "\n".join(lines) + "\n"
 
 

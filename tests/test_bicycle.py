@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 import pytest
 import sympy as sp
+from mechanics_models import sympy_bicycle
 
 import symmech as sm
 
@@ -35,27 +35,6 @@ G = 9.81
 WEAVE, CAPSIZE = 4.292382799, 6.024262734
 
 
-def _sympy_bicycle() -> tuple[object, dict]:
-    """Run sympy's test_bicycle up to its equations, return (KanesMethod, values)."""
-    import sympy.physics.mechanics.tests.test_kane3 as source
-
-    text = Path(source.__file__).read_text()
-    body = text.split("def test_bicycle():", 1)[1]
-    model_part, rest = body.split("(fr, frstar) = KM.kanes_equations(BL, FL)", 1)
-    values_part = rest.split("v = symbols('v')", 1)[1].split("A, B, _ = KM.linearize(", 1)[0]
-    namespace: dict = {}
-    exec(  # the installed sympy's own test code, not user input
-        "from sympy import *\nfrom sympy.physics.mechanics import *\n"
-        + "\n".join(line[4:] for line in model_part.splitlines())
-        + "\nKM.kanes_equations(BL, FL)\n",
-        namespace,
-    )
-    params_part = rest.split("v = symbols('v')", 1)[0]
-    exec("\n".join(line[4:] for line in params_part.splitlines()), namespace)
-    exec("v = symbols('v')\n" + "\n".join(line[4:] for line in values_part.splitlines()), namespace)
-    return namespace["KM"], namespace["val_dict"]
-
-
 def _benchmark_eigenvalues(speed: float) -> np.ndarray:
     Mi = np.linalg.inv(M_B)
     A = np.block(
@@ -65,7 +44,7 @@ def _benchmark_eigenvalues(speed: float) -> np.ndarray:
 
 
 def test_whipple_bicycle_eigenvalues_match_the_benchmark():
-    KM, val_dict = _sympy_bicycle()
+    KM, val_dict = sympy_bicycle()
     scene = sm.Scene.from_mechanics(KM, name="bicycle")
     mod = sm.codegen.generate(scene, target="c").load()
     params = {}

@@ -720,7 +720,7 @@ def _build(
                     [
                         M_block,
                         _matrix_block("A", A),
-                        Block("s", (2,), (sp.sympify(w.restitution), psi_t)),
+                        _impact_scalars(w, psi_t, S),
                     ],
                     (n,),
                     step="impact_kkt",
@@ -834,6 +834,16 @@ def _forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[st
             " they are stored as 0.0 without computation"
         )
     return notes
+
+
+def _impact_scalars(w, psi_t: sp.Expr, S: sp.Matrix | None) -> Block:
+    """The scalars of the KKT impact: alpha, psi_t, and with a declared wall velocity W
+    the values ``nu W`` the impulsive constraints hold v+ to (Carnot paper eq. 20; the
+    default W gives them from the Gram matrix in the generated code)."""
+    values = [sp.sympify(w.restitution), psi_t]
+    if w.velocity is not None and w.impulsive_matrix.rows:
+        values += list(sp.Matrix(w.impulsive_matrix) * sp.Matrix(w.velocity))
+    return Block("s", (len(values),), tuple(values))
 
 
 def _impact_equation(imp) -> str:

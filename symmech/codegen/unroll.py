@@ -379,9 +379,12 @@ def _impact_kkt(
     alpha: Value,
     psi_t: Value,
     v: Sequence[Value],
+    nu_w: Sequence[Value] | None = None,
 ) -> None:
     """sm_impact_kkt: Y = M^-1 A^T, G = A Y, r = b - A v, v+ = v + Y G^-1 r (Carnot
-    paper eqs. 6, 15, 20, by the Schur complement)."""
+    paper eqs. 6, 15, 20, by the Schur complement).  ``nu_w``: the values ``nu W`` of a
+    declared wall velocity W; None for the default W (normal in the metric), whose
+    ``nu W = -psi_t G[a, m] / G[m, m]``."""
     F = _factor(prog, n, diag, M)
     Y = [[A(a, i) for a in range(k)] for i in range(n)]
     _factor_solve(prog, F, Y, "Y")
@@ -394,8 +397,11 @@ def _impact_kkt(
             G[a, b] = prog.let(f"G{a}_{b}", _dot_from_zero([(A(a, i), Y[i][b]) for i in range(n)]))
     # the wall row: b_m - dpsi(v) = -(1 + alpha)(dpsi(v) + psi_t)
     r[m][0] = prog.let(f"r{m}", mul(add(1.0, alpha), sub(r[m][0], psi_t)))
-    for a in range(m + 1, k):  # the nu rows: nu V = -psi_t G[a, m] / G[m, m]
-        r[a][0] = prog.let(f"r{a}", add(r[a][0], div(mul(neg(psi_t), G[a, m]), G[m, m])))
+    for a in range(m + 1, k):  # the nu rows: nu (v+ - W) = 0
+        if nu_w is not None:
+            r[a][0] = prog.let(f"r{a}", add(r[a][0], nu_w[a - m - 1]))
+        else:  # nu W = -psi_t G[a, m] / G[m, m]
+            r[a][0] = prog.let(f"r{a}", add(r[a][0], div(mul(neg(psi_t), G[a, m]), G[m, m])))
     FG = _cholesky(prog, k, lambda i, j: G[i, j], "Lg", "the Gram matrix G = A M^-1 A^T")
     _cholesky_solve(prog, FG, r, "r")
     for i in range(n):
@@ -492,7 +498,8 @@ def trace_step(
         n, k, m, diag = args
         v = [Ref(f"v{i}", "v", i) for i in range(n)]
         s = cells["s"]
-        _impact_kkt(body, n, k, m, bool(diag), matrix("M"), matrix("A"), s[0], s[1], v)
+        nu_w = list(s[2:]) if len(s) > 2 else None
+        _impact_kkt(body, n, k, m, bool(diag), matrix("M"), matrix("A"), s[0], s[1], v, nu_w)
     body.statements = _prune(body.statements)
     # every run-time value the body reads must be finite (see the module docstring)
     read: dict[Ref, None] = {}

@@ -110,6 +110,9 @@ class DynamicTranslation:
             ),
             name=w.name or None,
             law=w.law,
+            velocity=None
+            if w.velocity is None
+            else tuple(self.expr(c, f"{field}.velocity") for c in w.velocity),
         )
 
 
@@ -118,7 +121,7 @@ def _has_dynamic(values: Iterable[object], time: sp.Symbol) -> bool:
     while stack:
         value = stack.pop()
         if isinstance(value, Wall):
-            stack.extend((value.psi, *value.impulsive_constraints))
+            stack.extend((value.psi, *value.impulsive_constraints, *(value.velocity or ())))
         elif isinstance(value, sp.MatrixBase):
             stack.extend(value)
         elif isinstance(value, list | tuple):

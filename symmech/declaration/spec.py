@@ -88,6 +88,7 @@ from symmech.declaration.symbols import t as TIME
 from symmech.declaration.symbols import velocity_of
 from symmech.declaration.unsigned import check_metric_signs
 from symmech.declaration.wall import Wall
+from symmech.declaration.wallvelocity import check_wall_velocity, wall_velocity_field
 from symmech.errors import SceneError
 
 __all__ = ["NON_SMOOTH", "Declaration", "ResolvedWall", "declare"]
@@ -105,6 +106,8 @@ class ResolvedWall:
     psi: sp.Expr
     impulsive_matrix: sp.ImmutableMatrix
     index: int
+    #: the declared wall velocity W (n x 1, velocity basis), or None for the default
+    velocity: sp.ImmutableMatrix | None = None
 
     @property
     def name(self) -> str:
@@ -120,7 +123,10 @@ class ResolvedWall:
 
     @property
     def moving(self) -> bool:
-        return TIME in self.psi.free_symbols
+        """psi depends on t, or the wall has a declared velocity that is not zero."""
+        if TIME in self.psi.free_symbols:
+            return True
+        return self.velocity is not None and any(e != 0 for e in self.velocity)
 
 
 @dataclass(frozen=True)
@@ -299,8 +305,9 @@ def declare(
             for A, c in enumerate(w.impulsive_constraints)
         ]
         alpha = Field(f"{label}.restitution", sp.sympify(w.restitution), frozenset())
-        wall_fields.append((k, label, w, psi_field, nu_fields))
-        fields += [f for f in (psi_field, *nu_fields, alpha) if f is not None]
+        w_field = wall_velocity_field(w, label, n, q_set | t_set, expr, problems)
+        wall_fields.append((k, label, w, psi_field, nu_fields, w_field))
+        fields += [f for f in (psi_field, *nu_fields, alpha, w_field) if f is not None]
     names = [w.name for w in wall_list if isinstance(w, Wall) and w.name]
     dup = sorted({x for x in names if names.count(x) > 1})
     if dup:
@@ -349,8 +356,8 @@ def declare(
         if m < n:
             check_independent(mu, points, "constraints", problems)
 
-    resolved: list[tuple[Wall, sp.Expr, sp.Matrix]] = []
-    for _k, label, w, psi_field, nu_fields in wall_fields:
+    resolved: list[tuple[Wall, sp.Expr, sp.Matrix, sp.Matrix | None]] = []
+    for _k, label, w, psi_field, nu_fields, w_field in wall_fields:
         if psi_field is not None and psi_field.ok and not (psi_field.value.free_symbols & q_set):
             problems.add(
                 f"{label}.psi = {short(psi_field.value)} does not depend on the coordinates"
@@ -376,12 +383,16 @@ def declare(
                 f"{label}.impulsive_constraints (with the permanent constraints)",
                 problems,
             )
-        resolved.append((w, psi_field.value, nu))
+        W = None
+        if w_field is not None and w_field.ok and psi_field.ok:
+            if check_wall_velocity(w_field.value, psi_field.value, label, q, S, points, problems):
+                W = sp.ImmutableMatrix(w_field.value)
+        resolved.append((w, psi_field.value, nu, W))
     problems.raise_if_any()
 
     walls_out = tuple(
-        ResolvedWall(wall=w, psi=psi, impulsive_matrix=sp.ImmutableMatrix(nu), index=k)
-        for k, (w, psi, nu) in enumerate(resolved)
+        ResolvedWall(wall=w, psi=psi, impulsive_matrix=sp.ImmutableMatrix(nu), index=k, velocity=W)
+        for k, (w, psi, nu, W) in enumerate(resolved)
     )
     return Declaration(
         coordinates=q,

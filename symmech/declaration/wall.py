@@ -72,6 +72,16 @@ class Wall:
         Optional name, used in messages and to look the wall up: ``scene.impact_map("floor")``.
     law:
         ``"newton"`` (default) or ``"energy"``; see :data:`LAWS`.
+    velocity:
+        Optional: the wall's velocity field W(t, q) in the velocity basis (n entries), the
+        velocity a configuration riding with the wall would have.  It must move with the
+        wall (``dpsi(W) + psi_t = 0``); its tangential part is what the impulsive
+        constraints hold the body to, ``nu (v+ - W) = 0`` (Carnot paper eq. 20).  Default:
+        the metric normal ``W = -psi_t grad psi / g(grad psi, grad psi)``, which has no
+        tangential part in the metric; that is the floor's own velocity only when the
+        metric does not couple the normal direction with the tangential ones (see the
+        README's worked example: a disc with an off-centre mass on a vertically moving
+        floor).
 
     >>> import sympy as sp, symmech as sm
     >>> x, y = sm.coordinates("x y")
@@ -84,6 +94,7 @@ class Wall:
     impulsive_constraints: tuple
     name: str
     law: str
+    velocity: tuple | None
 
     def __init__(
         self,
@@ -92,6 +103,7 @@ class Wall:
         impulsive_constraints: Sequence = (),
         name: str | None = None,
         law: str = "newton",
+        velocity: Sequence | sp.MatrixBase | None = None,
     ):
         name = "" if name is None else str(name)
         label = f"wall {name!r}" if name else "wall"
@@ -122,6 +134,21 @@ class Wall:
         object.__setattr__(self, "impulsive_constraints", tuple(impulsive_constraints))
         object.__setattr__(self, "name", name)
         object.__setattr__(self, "law", law)
+        if velocity is not None:
+            if isinstance(velocity, (str, bytes, sp.Basic)) and not isinstance(
+                velocity, sp.MatrixBase
+            ):
+                raise SceneError(
+                    f"{label}: velocity must be a sequence of components (one per velocity),"
+                    f" got {velocity!r}"
+                )
+            try:
+                velocity = tuple(velocity)
+            except TypeError:
+                raise SceneError(
+                    f"{label}: velocity must be a sequence of components, got {velocity!r}"
+                ) from None
+        object.__setattr__(self, "velocity", velocity)
 
     def __repr__(self) -> str:
         extra = (
@@ -131,4 +158,5 @@ class Wall:
         )
         nm = f", name={self.name!r}" if self.name else ""
         law = f", law={self.law!r}" if self.law != "newton" else ""
-        return f"Wall({self.psi}, restitution={self.restitution}{extra}{nm}{law})"
+        vel = f", velocity={list(self.velocity)}" if self.velocity is not None else ""
+        return f"Wall({self.psi}, restitution={self.restitution}{extra}{nm}{law}{vel})"

@@ -335,7 +335,8 @@ def derive_impact_map(
     text 001 section 3.2: ``v+ = W + PP(v- - W) + alpha sqrt(...) N``
     (:mod:`symmech.impacts.energy_law`).
 
-    ``wall_velocity`` (n x 1, velocity basis) overrides the default wall velocity
+    ``wall_velocity`` (n x 1, velocity basis; default: the wall's own ``velocity``, see
+    :mod:`symmech.declaration.wallvelocity`) overrides the default wall velocity
     ``V = -(psi_t/g(grad psi, grad psi)) grad psi``; it must satisfy ``dpsi(V) = -psi_t``
     (only the normal part of V is determined by psi; the tangential part enters the
     impulsive constraints ``nu(v+ - V) = 0``, eq. 20).
@@ -395,6 +396,8 @@ def derive_impact_map(
     proj = impact_projectors(g, mu, dpsi, nu, level, check=check)
 
     V: sp.Matrix | None = None
+    if wall_velocity is None and rw.velocity is not None:
+        wall_velocity = rw.velocity  # declared with the wall (checked by the declaration)
     if wall_velocity is not None:
         V = sp.Matrix(wall_velocity)
         if V.shape == (1, n):

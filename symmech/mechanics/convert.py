@@ -247,7 +247,11 @@ def _metric(model: _Model) -> sp.Matrix:
             for r in range(n):
                 for s in range(r, n):
                     M[r, s] += _dot(w[r], Iw[s])
+    from symmech.geometry.simplification import normal_form
+
     for r in range(n):
+        for s in range(r, n):
+            M[r, s] = normal_form(M[r, s])  # the Pythagorean reduction, within its budget
         for s in range(r):
             M[r, s] = M[s, r]
     return M

@@ -336,6 +336,18 @@ class Functions:
         #: and contact constraints do no work).
         self.energy_conserved = system.energy_conserved
         self._params = dict(params)
+        for w in system.scene.walls:
+            if (
+                w.velocity is not None
+                and TIME not in w.psi.free_symbols
+                and w.impulsive_matrix.rows
+                and any(e != 0 for e in w.velocity)
+            ):
+                raise SimulationError(
+                    f"wall {w.name!r} is static but has a declared velocity (a conveyor) and"
+                    " impulsive constraints: its contact mode would hold nu (v - W) = 0, which"
+                    " the simulator does not support; its impact map and generated code do"
+                )
         free = system.free
         if free.inputs:
             raise SimulationError(

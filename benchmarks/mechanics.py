@@ -1,0 +1,57 @@
+"""Importing a sympy.physics.mechanics model: symmech against KanesMethod, in one run.
+
+For the Whipple bicycle of sympy's own test suite (Meijaard et al. 2007; 4 coordinates,
+6 generalized speeds, 3 velocity constraints) this prints:
+
+* KanesMethod: the seconds it takes to form the equations (its construction and
+  ``kanes_equations``; the kinematics, common to both routes, excluded): the baseline;
+* symmech: ``Scene.from_mechanics`` (reading the bodies and loads, the validation of the
+  declaration), then ``codegen.generate(target="c")`` (strategy auto) and the compilation;
+* the ratios symmech / KanesMethod (the issue's target: derivation plus C generation
+  faster than KanesMethod alone, a ratio below 1).
+
+Usage: python3 benchmarks/mechanics.py
+"""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+
+from mechanics_models import sympy_bicycle
+
+import symmech as sm
+
+
+def main() -> None:
+    timings: dict = {}
+    KM, _ = sympy_bicycle(timings)
+    kane = timings["kane"]
+    warnings.simplefilter("ignore")
+    t0 = time.perf_counter()
+    scene = sm.Scene.from_mechanics(KM, name="bicycle")
+    t1 = time.perf_counter()
+    code = sm.codegen.generate(scene, target="c")
+    t2 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        code.write(tmp)
+        t3 = time.perf_counter()
+        code.load()
+        t4 = time.perf_counter()
+    imp, gen, comp = t1 - t0, t2 - t1, t4 - t3
+    print("Whipple bicycle (sympy test_kane3), seconds on this machine")
+    print(f"{'KanesMethod forms the equations (baseline)':48s} {kane:8.2f}")
+    print(f"{'symmech Scene.from_mechanics':48s} {imp:8.2f}   {imp / kane:6.2f}x")
+    print(f"{'symmech codegen.generate (C)':48s} {gen:8.2f}   {gen / kane:6.2f}x")
+    print(f"{'compile and load':48s} {comp:8.2f}")
+    total = imp + gen
+    print(f"{'symmech derivation + C generation':48s} {total:8.2f}   {total / kane:6.2f}x")
+
+
+if __name__ == "__main__":
+    main()
