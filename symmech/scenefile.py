@@ -36,6 +36,9 @@ Format (version 1)
     h = {}                       # arbitrary: "x - h" means x - h(t), kept symbolic
     V = { arguments = ["x", "y"] }   # arbitrary, of coordinates (and t): "V" means V(x, y)
 
+    [inputs]                     # run-time inputs: arbitrary real functions of t, given
+    tau = { description = "motor torque" }   # to generated code by name (inputs={"tau": ..})
+
     [frame]                      # quasi-velocities v with q_dot = S(q) v (optional)
     quasi_velocities = ["v_x", "v_y", "omega"]
     matrix = [[...], [...], [...]]     # S; or `inverse = [...]`, S^-1 (v = S^-1 q_dot),
@@ -208,6 +211,7 @@ _TOP_KEYS = (
     "constraints",
     "parameters",
     "functions",
+    "inputs",
     "frame",
     "walls",
 )
@@ -1026,6 +1030,7 @@ class _Loader:
             )
             self.names_refused = True
             return {}
+        raw = {**raw, **self.inputs(raw)}
         if len(raw) > MAX_NAMES:
             self.fail(
                 f"{len(raw)} functions (limit {MAX_NAMES})",
@@ -1094,6 +1099,40 @@ class _Loader:
         self.function_names = frozenset(raw)
         self.table.update(stand_in)
         self.table.update(out)
+        return out
+
+    def inputs(self, functions: dict) -> dict[str, dict]:
+        """``[inputs]``: run-time inputs, each an arbitrary real function of t (``tau = {}``
+        or ``tau = { description = "..." }``), read as ``[functions]`` entries ``{}``."""
+        raw = self.data.get("inputs", {})
+        if not isinstance(raw, dict):
+            self.fail(
+                f"expected a table [inputs], got {_toml_type(raw)}",
+                "inputs",
+                self.line(None, "inputs"),
+            )
+            self.names_refused = True
+            return {}
+        out: dict[str, dict] = {}
+        for key, spec in raw.items():
+            field_name = f"inputs.{_clip(key)}"
+            line = self.entry_line("inputs", key)
+            if key in functions:
+                self.fail(
+                    "declared both in [functions] and in [inputs]", field_name, line, _clip(key)
+                )
+                self.names_refused = True
+                continue
+            if not isinstance(spec, dict) or set(spec) - {"description"}:
+                self.fail(
+                    'an input is a table {} or { description = "..." } (a function of t given'
+                    " at run time)",
+                    field_name,
+                    line,
+                )
+                self.names_refused = True
+                continue
+            out[key] = dict(spec)
         return out
 
     def function_arguments(

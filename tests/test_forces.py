@@ -236,3 +236,32 @@ def test_dynamicsymbols_declare_the_same_scene():
     assert F in dyn.forcing().atoms(sp.core.function.AppliedUndef)
     with pytest.raises(sm.SceneError, match="acceleration of coordinate x"):
         sm.Scene((x, th), kinetic_energy=T, forces=[x.diff(me.dynamicsymbols._t, 2), 0])
+
+
+def test_scene_file_inputs_table():
+    text = """
+coordinates = ["x"]
+metric = ["m"]
+forces = ["-c*xdot + tau"]
+[parameters]
+m = 2
+c = 0.1
+[inputs]
+tau = { description = "the push" }
+"""
+    scene = sm.loads_scene(text, name="pushed").scene
+    tau = sp.Function("tau", real=True)(sm.t)
+    assert tau in scene.forcing()[0].atoms(sp.core.function.AppliedUndef)
+    mod = sm.codegen.generate(scene, target="numpy").load()
+    assert mod.inputs == ("tau",)
+    np.testing.assert_allclose(
+        mod.acceleration([0.0], [1.0], {"m": 2, "c": 0.1}, inputs={"tau": 0.5}), [0.2]
+    )
+    with pytest.raises(sm.SceneError, match=r"inputs.tau \(line 9\): an input is a table"):
+        sm.loads_scene(text.replace('tau = { description = "the push" }', "tau = 3"))
+    with pytest.raises(sm.SceneError, match="declared both in"):
+        sm.loads_scene(text + "[functions]\ntau = {}\n")
+    with pytest.raises(sm.SceneError, match=r"expected a table \[inputs\]"):
+        sm.loads_scene(
+            "inputs = 3\n" + text.replace('[inputs]\ntau = { description = "the push" }\n', "")
+        )

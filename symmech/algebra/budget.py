@@ -55,6 +55,7 @@ __all__ = [
     "IMPACT_GCD_TERMS",
     "IMPACT_TERMS",
     "LIGHT_SIMPLIFY_OPS",
+    "NOTE_EXPAND_OPS",
     "QUADRATIC_SIMPLIFY_OPS",
     "SINGULAR_FACTOR_OPS",
     "STABLE_ENTRY_OPS",
@@ -129,6 +130,10 @@ CLOSED_FORM_TERMS = 500
 #: operations, skip: velocity-free entries put in the stable factored form before
 #: printing (larger ones keep the form they were derived in).
 STABLE_ENTRY_OPS = 200
+
+#: Operations of a term of the forcing expanded to count its Christoffel symbols for the
+#: ``omitted`` note of generated code; a larger term counts every pair of its velocities.
+NOTE_EXPAND_OPS = 100
 
 
 class BudgetExceeded(SymmechError):

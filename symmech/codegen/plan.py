@@ -814,18 +814,25 @@ def _forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[st
                     idx += [index[base]] * int(power)
                 elif factor.free_symbols & index.keys():
                     plain = False
-            if not plain and not expanded:
+            if not plain and not expanded and sp.count_ops(term) <= limits.NOTE_EXPAND_OPS:
                 monomials(k, sp.expand(term), True)
+            elif not plain:
+                # too large to expand for a note: count every pair of its velocities as
+                # present (the note then gives a lower bound of the zeros)
+                inside = sorted(index[s] for s in term.free_symbols & index.keys())
+                present.update((k, a, b) for a in inside for b in inside if a <= b)
+                bounded.append(k)
             elif len(idx) == 2:
                 present.add((k, min(idx), max(idx)))
 
+    bounded: list[int] = []
     for k, e in enumerate(f):
         monomials(k, e)
     nonzero = len(present)
     what = "connection coefficients omega_k(ij)" if frame else "Christoffel symbols Gamma_k(ij)"
     notes = [
-        f"forcing: {total - nonzero} of the {total} {what} (symmetrised in i, j) are"
-        " identically zero and are never computed"
+        f"forcing: {'at least ' if bounded else ''}{total - nonzero} of the {total} {what}"
+        " (symmetrised in i, j) are identically zero and are never computed"
     ]
     zeros = [k for k, e in enumerate(f) if e == 0]
     if zeros:

@@ -103,7 +103,7 @@ class DynamicTranslation:
         if not isinstance(w, Wall):
             return w
         return Wall(
-            self.expr(w.psi, f"{field}.psi"),  # type: ignore[arg-type]
+            self.expr(w.psi, f"{field}.psi"),
             restitution=w.restitution,
             impulsive_constraints=tuple(
                 self.expr(c, f"{field}.impulsive_constraints") for c in w.impulsive_constraints
@@ -142,8 +142,10 @@ def dynamic_translation(
     if isinstance(quasi_velocities, sp.Basic):
         quasi_velocities = (quasi_velocities,)
     try:
-        q = tuple(coordinates)  # type: ignore[arg-type]
-        u = None if quasi_velocities is None else tuple(quasi_velocities)  # type: ignore[arg-type]
+        q: tuple = tuple(coordinates)  # type: ignore[arg-type]
+        u: tuple | None = (
+            None if quasi_velocities is None else tuple(quasi_velocities)  # type: ignore[arg-type]
+        )
     except TypeError:
         return None  # reported by the structural checks
     time = _mechanics_time()
