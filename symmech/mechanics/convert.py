@@ -87,6 +87,7 @@ class _Model:
     lagrangian: sp.Expr | None = None  # a LagrangesMethod built from L alone (no bodies)
 
     def __init__(self, model: object):
+        self.partials: dict = {}
         me = _me()
         t = me.dynamicsymbols._t
         kind = _model_kind(model)
@@ -211,7 +212,16 @@ def _in_basis(vec: Any, model: _Model) -> Any:
 
 
 def _partials(vec: Any, model: _Model, what: str) -> list[Any]:
-    """The partial velocities d vec / d w^r, after checking vec is linear with no offset."""
+    """The partial velocities d vec / d w^r, after checking vec is linear with no offset
+    (computed once per vector: the metric, the loads and the inertia forces share them)."""
+    key = (what, vec)
+    hit = model.partials.get(key)
+    if hit is None:
+        hit = model.partials[key] = _partials_of(vec, model, what)
+    return hit
+
+
+def _partials_of(vec: Any, model: _Model, what: str) -> list[Any]:
     frame = model.frame
     vec = _in_basis(vec, model)
     parts = [vec.diff(w, frame, var_in_dcm=False) for w in model.basis]
