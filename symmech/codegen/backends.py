@@ -31,8 +31,8 @@ import jinja2.meta
 import sympy as sp
 
 from symmech.codegen.escape import c_comment, c_string, python_comment, python_docstring
-from symmech.codegen.printers import SymmechCPrinter, SymmechNumPyPrinter
-from symmech.codegen.unroll import CDialect, Dialect, NumPyDialect
+from symmech.codegen.printers import SymmechCPrinter, SymmechMathPrinter, SymmechNumPyPrinter
+from symmech.codegen.unroll import CDialect, Dialect, NumPyDialect, ScalarDialect
 
 __all__ = [
     "BACKENDS",
@@ -85,6 +85,10 @@ class Backend:
     make_printer: Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer]
     dialect: Dialect
     description: str
+    #: a printer and a dialect for one-state variants of the functions (NumPy), or None
+    scalar: (
+        tuple[Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer], Dialect] | None
+    ) = None
 
     def template_dir(self) -> Path:
         return template_root() / self.name
@@ -109,6 +113,7 @@ BACKENDS: dict[str, Backend] = {
         make_printer=SymmechNumPyPrinter,
         dialect=NumPyDialect(),
         description="a NumPy module, vectorised over leading axes",
+        scalar=(SymmechMathPrinter, ScalarDialect()),
     ),
 }
 

@@ -24,7 +24,7 @@ from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule
 from symmech.errors import SymmechError
 
-__all__ = ["Fast", "NumericalError", "Raw", "c_raw", "numpy_raw"]
+__all__ = ["Fast", "NumericalError", "Raw", "c_raw", "numpy_fast", "numpy_raw"]
 
 _STATUS = {
     1: "a matrix that must be positive definite is not",
@@ -72,6 +72,75 @@ def numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
         return out
 
     return call
+
+
+_SEQUENCES = (list, tuple)
+_DTYPES = "dl"  # float64, int64 (any byte order: a copy converts)
+_PLAIN = (float, int)
+
+
+def _plain_arguments(
+    state: tuple[object, ...],
+    params: object,
+    takes_parameters: bool,
+    checks: Sequence[tuple[int, tuple[int, ...]]],
+) -> tuple[object, ...] | None:
+    """The arguments of a one-state call (the state arrays, then p if taken) when they are
+    the plain case the fast paths handle: float64 or int64 vectors, or lists and tuples of
+    floats and ints, of the sizes in ``checks``; None for anything else (the general path
+    then converts or explains)."""
+    if takes_parameters:
+        args = (*state, params)
+    elif params is not None:
+        return None  # the general path checks the parameters it is given
+    else:
+        args = state
+    if len(args) != len(checks):
+        return None
+    for a, (k, shape) in zip(args, checks, strict=True):
+        kind = type(a)
+        if kind is np.ndarray:
+            if a.shape != shape or a.dtype.char not in _DTYPES:  # type: ignore[attr-defined]
+                return None
+        elif kind not in _SEQUENCES or len(a) != k:  # type: ignore[arg-type]
+            return None
+        elif not all(type(x) in _PLAIN for x in a):  # type: ignore[attr-defined]
+            return None  # bool, str, complex...: the general path refuses them
+    return args
+
+
+def numpy_fast(
+    one: Callable, spec: LoweredFunction, n: int, n_parameters: int, rules: Sequence[ParameterRule]
+) -> Fast:
+    """The one-state caller of a NumPy function through its variant ``_one_<name>`` (plain
+    floats, ``math``; the same operations in the same order as the vectorised function).
+    None, for the general path to redo the call and explain, when the arguments are not
+    plain, a parameter breaks its rule, or the evaluation fails or is not finite."""
+    sizes = [2 * n if s == "y" else n for s in spec.state]
+    checks = [(k, (k,)) for k in sizes]
+    if spec.takes_parameters:
+        checks.append((n_parameters, (n_parameters,)))
+    out_shape = spec.out_shape
+    isfinite = math.isfinite
+
+    def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
+        args = _plain_arguments(state, params, spec.takes_parameters, checks)
+        if args is None:
+            return None
+        values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined,union-attr]
+        if spec.takes_parameters:
+            p = values[-1]
+            if not all(isfinite(p[r.index]) and r.holds_value(p[r.index]) for r in rules):
+                return None  # the general path names the parameter
+        try:
+            out = one(*values)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+            return None  # math's domain and overflow errors, a failed factorisation
+        if not all(isfinite(x) for x in out):
+            return None
+        return np.array(out).reshape(out_shape)
+
+    return fast
 
 
 def c_raw(
@@ -170,29 +239,11 @@ def c_raw(
         checks = [(k, (k,)) for k in sizes]
         if spec.takes_parameters:
             checks.append((n_parameters, (n_parameters,)))
-        sequences = (list, tuple)
-        ndarray = np.ndarray
-        dtypes = "dl"  # float64, int64 (any byte order: the copy into a buffer converts)
-        plain = (float, int)
 
         def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
-            if spec.takes_parameters:
-                args = (*state, params)
-            elif params is not None:
-                return None  # the general path checks the parameters it is given
-            else:
-                args = state
-            if len(args) != len(checks):
+            args = _plain_arguments(state, params, spec.takes_parameters, checks)
+            if args is None:
                 return None
-            for a, (k, shape) in zip(args, checks, strict=True):
-                kind = type(a)
-                if kind is ndarray:
-                    if a.shape != shape or a.dtype.char not in dtypes:  # type: ignore[union-attr]
-                        return None
-                elif kind not in sequences or len(a) != k:  # type: ignore[arg-type]
-                    return None
-                elif not all(type(x) in plain for x in a):  # type: ignore[attr-defined]
-                    return None  # bool, str, complex...: the general path refuses them
             try:
                 arrays, addresses = local.fast
             except AttributeError:

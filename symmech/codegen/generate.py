@@ -135,7 +135,14 @@ def generate(
     for f in plan.functions:
         callee = done[f.calls] if f.calls is not None else None
         done[f.name] = lower(
-            f, plan, names, backend.make_printer, dialect=backend.dialect, cse=cse, callee=callee
+            f,
+            plan,
+            names,
+            backend.make_printer,
+            dialect=backend.dialect,
+            cse=cse,
+            callee=callee,
+            scalar=backend.scalar,
         )
     lowered = tuple(done.values())
     omitted = (*plan.omitted, *_argument_notes(plan, lowered))

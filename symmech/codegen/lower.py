@@ -64,7 +64,7 @@ from symmech.codegen.printers import (
     product_power,
     safe_rewrite,
 )
-from symmech.codegen.unroll import STEP_INPUTS, Dialect, trace_step
+from symmech.codegen.unroll import STEP_INPUTS, Dialect, Program, trace_step
 from symmech.declaration.symbols import t as TIME
 
 __all__ = ["LoweredFunction", "Names", "lower", "step_flops"]
@@ -128,6 +128,8 @@ class LoweredFunction:
     expressions: tuple[sp.Expr, ...] = ()  # after CSE: the temporaries, then the entries
     metric_check: bool = False  # the closed form's metric is checked positive definite
     scaled: bool = False  # evaluated for v / 2^e and scaled back (a static wall's impact)
+    #: the one-state variant's body (NumPy backend: plain floats, ``math``), or None
+    scalar: tuple[str, ...] | None = None
 
     @property
     def one_state_fast(self) -> bool:
@@ -272,10 +274,14 @@ def lower(
     dialect: Dialect,
     cse: bool = True,
     callee: LoweredFunction | None = None,
+    scalar: tuple[Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer], Dialect]
+    | None = None,
 ) -> LoweredFunction:
     """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer,
     ``dialect`` prints its unrolled linear algebra); ``callee`` is the lowered function
-    that ``f`` calls (``rhs``: ``acceleration``)."""
+    that ``f`` calls (``rhs``: ``acceleration``).  ``scalar`` (a printer and a dialect)
+    also prints the one-state variant of a function of the state and the parameters
+    (:func:`_scalar_body`)."""
     if f.calls is not None and (callee is None or callee.name != f.calls):
         raise CodegenError(f"{f.name} calls {f.calls}: lower it first and pass it as callee")
     entries: list[sp.Expr] = []
@@ -420,6 +426,12 @@ def lower(
         cost += f"; then the call of {callee.name}: {callee.operations} operations"
         if callee.solve_flops:
             cost += f" + {callee.solve_flops} flops"
+    scaled = f.kind == "impact" and not plan.moving_walls[f.wall_index or 0]
+    scalar_body = None
+    if scalar is not None and not (takes_t or takes_u or scaled):
+        scalar_body = _scalar_body(
+            f, plan.n, unpack, replacements, where, final, program, check, table, scalar, callee
+        )
     return LoweredFunction(
         name=f.name,
         kind=f.kind,
@@ -449,5 +461,67 @@ def lower(
         cost=cost + ".",
         expressions=tuple(e for _, e in replacements) + tuple(final),
         metric_check=check,
-        scaled=f.kind == "impact" and not plan.moving_walls[f.wall_index or 0],
+        scaled=scaled,
+        scalar=scalar_body,
     )
+
+
+def _scalar_body(
+    f: FunctionPlan,
+    n: int,
+    unpack: tuple[tuple[str, int, str], ...],
+    replacements: list,
+    where: list[tuple[str, int, tuple[int, ...]]],
+    final: list[sp.Expr],
+    program: Program | None,
+    check: bool,
+    table: Mapping[sp.Symbol, str],
+    scalar: tuple[Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer], Dialect],
+    callee: LoweredFunction | None,
+) -> tuple[str, ...] | None:
+    """The body of the one-state variant ``_one_<name>`` of a NumPy function: the same
+    expressions, operations and order on plain floats (the state arrays and p as lists),
+    ``math`` in place of ``numpy``, the output a list (``return out`` follows).  None when
+    it cannot be printed so (a function ``math`` lacks, a local block, a callee without a
+    variant)."""
+    make_printer, dialect = scalar
+    if callee is not None and callee.scalar is None:
+        return None
+    if any(blk not in ("out", "M") for blk, _, _ in where) and program is None:
+        return None
+    printer = make_printer(table)
+    try:
+        temporaries = [f"{s.name} = {printer.doprint(e)}" for s, e in replacements]
+        printed = [
+            (blk, flat, printer.doprint(e)) for (blk, flat, _), e in zip(where, final, strict=True)
+        ]
+    except (ValueError, TypeError, NotImplementedError):  # names, unprintable functions
+        return None
+    if any("Not supported" in line for line in temporaries) or any(
+        "Not supported" in text for _, _, text in printed
+    ):
+        return None
+    lines: list[str] = []
+    if f.state == ("y",):
+        lines += [f"q = y[:{n}]", f"v = y[{n}:]"]
+    lines += [f"{name} = {array}[{i}]" for array, i, name in unpack]
+    lines += temporaries
+    out_size = 1
+    for k in f.out_shape:
+        out_size *= k
+    if program is not None and not check:
+        exprs = {(blk, flat): text for blk, flat, text in printed}
+        lines += dialect.lines(program, f.out_shape, exprs)
+    else:
+        if any(blk not in ("out", "M") for blk, _, _ in printed):
+            return None
+        lines.append(f"out = [0.0] * {out_size}")
+        lines += [f"out[{flat}] = {text}" for blk, flat, text in printed if blk == "out"]
+        if check:
+            assert program is not None
+            exprs = {(blk, flat): text for blk, flat, text in printed if blk == "M"}
+            lines += dialect.lines(program, f.out_shape, exprs)
+    if callee is not None:
+        args = ", ".join(callee.arguments)
+        lines.append(f"out[{n}:] = _one_{callee.name}({args})")
+    return tuple(lines)

@@ -54,7 +54,7 @@ import numpy as np
 import sympy as sp
 
 from symmech.codegen.build import DEFAULT_FLAGS, cache_dir, compile_library, load_library
-from symmech.codegen.callers import Fast, NumericalError, Raw, c_raw, numpy_raw
+from symmech.codegen.callers import Fast, NumericalError, Raw, c_raw, numpy_fast, numpy_raw
 from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule, check_parameters, real_array
@@ -473,8 +473,20 @@ def load_generated(
     if code.target == "numpy":
         module, path = _import_numpy_module(code, cache_dir(cache))
         raw = {f.name: numpy_raw(getattr(module, f.name), f) for f in code.functions}
-        out = SceneModule(code, raw, path)
-        out.fast_path = "NumPy module"
+        n_parameters = len(code.plan.parameters)
+        fast = {
+            f.name: numpy_fast(
+                getattr(module, f"_one_{f.name}"),
+                f,
+                code.plan.n,
+                n_parameters,
+                code.parameter_rules,
+            )
+            for f in code.functions
+            if f.scalar is not None and hasattr(module, f"_one_{f.name}")
+        }
+        out = SceneModule(code, raw, path, fast)
+        out.fast_path = "NumPy module (one state: plain floats and math)"
         return out
     kwargs: dict[str, Any] = {"compiler": compiler, "cache": cache}
     if flags is not None:

@@ -35,11 +35,13 @@ from sympy.codegen.cfunctions import hypot
 from sympy.codegen.rewriting import ReplaceOptim, optimize, optims_c99
 from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter
+from sympy.printing.pycode import PythonCodePrinter
 
 __all__ = [
     "FOLD_DIGITS",
     "MAX_PRODUCT_POWER",
     "SymmechCPrinter",
+    "SymmechMathPrinter",
     "SymmechNumPyPrinter",
     "correctly_rounded",
     "fold_numbers",
@@ -330,3 +332,27 @@ class SymmechNumPyPrinter(_Float64Mixin, NumPyPrinter):
 
     def _print_log1p(self, expr: sp.Expr) -> str:
         return f"numpy.log1p({self._print(expr.args[0])})"
+
+
+class SymmechMathPrinter(_Float64Mixin, PythonCodePrinter):
+    """Python printer over plain floats (``math`` functions): the one-state variants of the
+    NumPy module's functions, with the NumPy printer's names and float64 conventions.  An
+    expression ``math`` cannot evaluate raises ``ValueError`` (the variant is then not
+    emitted)."""
+
+    _sqrt = "math.sqrt"
+
+    def __init__(self, names: Mapping[sp.Symbol, str]):
+        super().__init__(
+            {"fully_qualified_modules": True, "allow_unknown_functions": False, "strict": True}
+        )
+        self._init_names(names)
+
+    def _print_hypot(self, expr: sp.Expr) -> str:
+        return f"math.hypot({self._print(expr.args[0])}, {self._print(expr.args[1])})"
+
+    def _print_expm1(self, expr: sp.Expr) -> str:
+        return f"math.expm1({self._print(expr.args[0])})"
+
+    def _print_log1p(self, expr: sp.Expr) -> str:
+        return f"math.log1p({self._print(expr.args[0])})"

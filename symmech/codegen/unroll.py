@@ -644,3 +644,27 @@ class NumPyDialect(Dialect):
 
     def store(self, index: int, expr: str) -> str:
         return f"out[..., {index}] = {expr}"
+
+
+class ScalarDialect(NumPyDialect):
+    """The one-state variants of the NumPy module: plain floats in lists, ``math``."""
+
+    sqrt = "math.sqrt"
+
+    def ref(self, r: Ref) -> str:
+        return f"{r.array}[{r.index}]" if r.array else r.name
+
+    def positive(self, pivot: str) -> list[str]:
+        return [
+            f"if not {pivot} > 0.0:",
+            '    raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")',
+        ]
+
+    def allocate(self, out_shape: tuple[int, ...]) -> list[str]:
+        size = 1
+        for k in out_shape:
+            size *= k
+        return [f"out = [0.0] * {size}"]
+
+    def store(self, index: int, expr: str) -> str:
+        return f"out[{index}] = {expr}"

@@ -101,6 +101,24 @@ def mass_matrix(q, p):
     return out
 
 
+def _one_mass_matrix(q, p):
+    """mass_matrix for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    p_I = p[0]
+    p_m = p[3]
+    out = [0.0] * 9
+    out[0] = p_m
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    out[4] = p_m
+    out[5] = 0.0
+    out[6] = 0.0
+    out[7] = 0.0
+    out[8] = p_I
+    return out
+
+
 def forcing(q, v):
     """forcing f(q, v, t) of the unconstrained equations g v_dot = f.
 
@@ -118,6 +136,16 @@ def forcing(q, v):
     return out
 
 
+def _one_forcing(q, v):
+    """forcing for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 3
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    return out
+
+
 def acceleration(q, v):
     """acceleration v_dot (closed form).
 
@@ -132,6 +160,16 @@ def acceleration(q, v):
     out[..., 0] = 0.0
     out[..., 1] = 0.0
     out[..., 2] = 0.0
+    return out
+
+
+def _one_acceleration(q, v):
+    """acceleration for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 3
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
     return out
 
 
@@ -157,6 +195,22 @@ def rhs(y):
     return out
 
 
+def _one_rhs(y):
+    """rhs for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q = y[:3]
+    v = y[3:]
+    v_xdot = v[0]
+    v_ydot = v[1]
+    v_thetadot = v[2]
+    out = [0.0] * 6
+    out[0] = v_xdot
+    out[1] = v_ydot
+    out[2] = v_thetadot
+    out[3:] = _one_acceleration(q, v)
+    return out
+
+
 def energy(q, v, p):
     """total energy T + V.
 
@@ -178,6 +232,20 @@ def energy(q, v, p):
     return out
 
 
+def _one_energy(q, v, p):
+    """energy for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    v_xdot = v[0]
+    v_ydot = v[1]
+    v_thetadot = v[2]
+    p_I = p[0]
+    p_m = p[3]
+    tmp0 = (0.5)*p_m
+    out = [0.0] * 1
+    out[0] = (0.5)*p_I*(v_thetadot*v_thetadot) + tmp0*(v_xdot*v_xdot) + tmp0*(v_ydot*v_ydot)
+    return out
+
+
 def psi_wall(q, p):
     """gap of wall 'wall'; the admissible side is psi >= 0.
 
@@ -193,6 +261,18 @@ def psi_wall(q, p):
     p_b = p[..., 2]
     out = numpy.empty(shape + ())
     out[...] = -q_x - numpy.hypot(p_a*numpy.cos(q_theta), p_b*numpy.sin(q_theta))
+    return out
+
+
+def _one_psi_wall(q, p):
+    """psi_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q_x = q[0]
+    q_theta = q[2]
+    p_a = p[1]
+    p_b = p[2]
+    out = [0.0] * 1
+    out[0] = -q_x - math.hypot(p_a*math.cos(q_theta), p_b*math.sin(q_theta))
     return out
 
 
@@ -214,6 +294,21 @@ def dpsi_wall(q, p):
     out[..., 0] = -1.0
     out[..., 1] = 0.0
     out[..., 2] = tmp0*tmp1*(p_a - p_b)*(p_a + p_b)/numpy.hypot(p_a*tmp1, p_b*tmp0)
+    return out
+
+
+def _one_dpsi_wall(q, p):
+    """dpsi_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q_theta = q[2]
+    p_a = p[1]
+    p_b = p[2]
+    tmp0 = math.sin(q_theta)
+    tmp1 = math.cos(q_theta)
+    out = [0.0] * 3
+    out[0] = -1.0
+    out[1] = 0.0
+    out[2] = tmp0*tmp1*(p_a - p_b)*(p_a + p_b)/math.hypot(p_a*tmp1, p_b*tmp0)
     return out
 
 

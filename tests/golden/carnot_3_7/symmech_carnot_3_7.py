@@ -101,6 +101,24 @@ def mass_matrix(q, p):
     return out
 
 
+def _one_mass_matrix(q, p):
+    """mass_matrix for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    p_k = p[2]
+    p_m = p[3]
+    out = [0.0] * 9
+    out[0] = p_m
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    out[4] = p_m
+    out[5] = 0.0
+    out[6] = 0.0
+    out[7] = 0.0
+    out[8] = (p_k*p_k)*p_m
+    return out
+
+
 def forcing(q, v):
     """forcing f(q, v, t) of the unconstrained equations g v_dot = f.
 
@@ -118,6 +136,16 @@ def forcing(q, v):
     return out
 
 
+def _one_forcing(q, v):
+    """forcing for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 3
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    return out
+
+
 def acceleration(q, v):
     """acceleration v_dot (closed form).
 
@@ -132,6 +160,16 @@ def acceleration(q, v):
     out[..., 0] = 0.0
     out[..., 1] = 0.0
     out[..., 2] = 0.0
+    return out
+
+
+def _one_acceleration(q, v):
+    """acceleration for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 3
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
     return out
 
 
@@ -157,6 +195,22 @@ def rhs(y):
     return out
 
 
+def _one_rhs(y):
+    """rhs for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q = y[:3]
+    v = y[3:]
+    v_xdot = v[0]
+    v_ydot = v[1]
+    v_thetadot = v[2]
+    out = [0.0] * 6
+    out[0] = v_xdot
+    out[1] = v_ydot
+    out[2] = v_thetadot
+    out[3:] = _one_acceleration(q, v)
+    return out
+
+
 def energy(q, v, p):
     """total energy T + V.
 
@@ -178,6 +232,20 @@ def energy(q, v, p):
     return out
 
 
+def _one_energy(q, v, p):
+    """energy for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    v_xdot = v[0]
+    v_ydot = v[1]
+    v_thetadot = v[2]
+    p_k = p[2]
+    p_m = p[3]
+    tmp0 = (0.5)*p_m
+    out = [0.0] * 1
+    out[0] = (p_k*p_k)*(v_thetadot*v_thetadot)*tmp0 + tmp0*(v_xdot*v_xdot) + tmp0*(v_ydot*v_ydot)
+    return out
+
+
 def psi_rough_wall(q, p):
     """gap of wall 'rough_wall'; the admissible side is psi >= 0.
 
@@ -194,6 +262,16 @@ def psi_rough_wall(q, p):
     return out
 
 
+def _one_psi_rough_wall(q, p):
+    """psi_rough_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q_y = q[1]
+    p_R = p[0]
+    out = [0.0] * 1
+    out[0] = -p_R + q_y
+    return out
+
+
 def dpsi_rough_wall(q):
     """gradient d psi/d q of wall 'rough_wall' (coordinates).
 
@@ -207,6 +285,16 @@ def dpsi_rough_wall(q):
     out[..., 0] = 0.0
     out[..., 1] = 1.0
     out[..., 2] = 0.0
+    return out
+
+
+def _one_dpsi_rough_wall(q):
+    """dpsi_rough_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 3
+    out[0] = 0.0
+    out[1] = 1.0
+    out[2] = 0.0
     return out
 
 

@@ -124,6 +124,51 @@ def mass_matrix(q, p):
     return out
 
 
+def _one_mass_matrix(q, p):
+    """mass_matrix for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    p_k = p[1]
+    tmp0 = (p_k*p_k)
+    out = [0.0] * 36
+    out[0] = 1.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    out[4] = 0.0
+    out[5] = 0.0
+    out[6] = 0.0
+    out[7] = 1.0
+    out[8] = 0.0
+    out[9] = 0.0
+    out[10] = 0.0
+    out[11] = 0.0
+    out[12] = 0.0
+    out[13] = 0.0
+    out[14] = 1.0
+    out[15] = 0.0
+    out[16] = 0.0
+    out[17] = 0.0
+    out[18] = 0.0
+    out[19] = 0.0
+    out[20] = 0.0
+    out[21] = tmp0
+    out[22] = 0.0
+    out[23] = 0.0
+    out[24] = 0.0
+    out[25] = 0.0
+    out[26] = 0.0
+    out[27] = 0.0
+    out[28] = tmp0
+    out[29] = 0.0
+    out[30] = 0.0
+    out[31] = 0.0
+    out[32] = 0.0
+    out[33] = 0.0
+    out[34] = 0.0
+    out[35] = tmp0
+    return out
+
+
 def forcing(q, v):
     """forcing f(q, v, t) of the unconstrained equations g v_dot = f.
 
@@ -141,6 +186,19 @@ def forcing(q, v):
     out[..., 3] = 0.0
     out[..., 4] = 0.0
     out[..., 5] = 0.0
+    return out
+
+
+def _one_forcing(q, v):
+    """forcing for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 6
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    out[4] = 0.0
+    out[5] = 0.0
     return out
 
 
@@ -188,6 +246,42 @@ def acceleration(q, v, p):
     return out
 
 
+def _one_acceleration(q, v, p):
+    """acceleration for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    p_k = p[1]
+    p_r = p[2]
+    tmp0 = (p_k*p_k)
+    M3_3 = tmp0
+    M4_4 = tmp0
+    M5_5 = tmp0
+    mu0_4 = -p_r
+    mu1_3 = p_r
+    _require_finite(M3_3, M4_4, M5_5, mu1_3, mu0_4)
+    if not M3_3 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M4_4 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M5_5 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    X3_1 = mu1_3/M3_3
+    X4_0 = mu0_4/M4_4
+    C0_0 = 1.0 + mu0_4*X4_0
+    C1_1 = 1.0 + mu1_3*X3_1
+    if not C0_0 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not C1_1 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    out = [0.0] * 6
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    out[4] = 0.0
+    out[5] = 0.0
+    return out
+
+
 def rhs(y, p):
     """first-order system y = (q, v): y_dot = (q_dot, v_dot).
 
@@ -224,6 +318,36 @@ def rhs(y, p):
     return out
 
 
+def _one_rhs(y, p):
+    """rhs for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q = y[:6]
+    v = y[6:]
+    q_theta = q[4]
+    q_psi = q[5]
+    v_v_x = v[0]
+    v_v_y = v[1]
+    v_v_z = v[2]
+    v_omega_x = v[3]
+    v_omega_y = v[4]
+    v_omega_z = v[5]
+    tmp0 = (1.0/math.sin(q_theta))
+    tmp1 = math.sin(q_psi)
+    tmp2 = v_omega_x*tmp1
+    tmp3 = math.cos(q_psi)
+    tmp4 = v_omega_y*tmp3
+    tmp5 = (1.0/math.tan(q_theta))
+    out = [0.0] * 12
+    out[0] = v_v_x
+    out[1] = v_v_y
+    out[2] = v_v_z
+    out[3] = tmp0*tmp2 - tmp0*tmp4
+    out[4] = v_omega_x*tmp3 + v_omega_y*tmp1
+    out[5] = v_omega_z - tmp2*tmp5 + tmp4*tmp5
+    out[6:] = _one_acceleration(q, v, p)
+    return out
+
+
 def energy(q, v, p):
     """total energy T + V.
 
@@ -244,6 +368,22 @@ def energy(q, v, p):
     tmp0 = (0.5)*(p_k*p_k)
     out = numpy.empty(shape + ())
     out[...] = (v_omega_x*v_omega_x)*tmp0 + (v_omega_y*v_omega_y)*tmp0 + (v_omega_z*v_omega_z)*tmp0 + (0.5)*(v_v_x*v_v_x) + (0.5)*(v_v_y*v_v_y) + (0.5)*(v_v_z*v_v_z)
+    return out
+
+
+def _one_energy(q, v, p):
+    """energy for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    v_v_x = v[0]
+    v_v_y = v[1]
+    v_v_z = v[2]
+    v_omega_x = v[3]
+    v_omega_y = v[4]
+    v_omega_z = v[5]
+    p_k = p[1]
+    tmp0 = (0.5)*(p_k*p_k)
+    out = [0.0] * 1
+    out[0] = (v_omega_x*v_omega_x)*tmp0 + (v_omega_y*v_omega_y)*tmp0 + (v_omega_z*v_omega_z)*tmp0 + (0.5)*(v_v_x*v_v_x) + (0.5)*(v_v_y*v_v_y) + (0.5)*(v_v_z*v_v_z)
     return out
 
 
@@ -288,6 +428,39 @@ def multipliers(q, v, p):
     return out
 
 
+def _one_multipliers(q, v, p):
+    """multipliers for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    p_k = p[1]
+    p_r = p[2]
+    tmp0 = (p_k*p_k)
+    M3_3 = tmp0
+    M4_4 = tmp0
+    M5_5 = tmp0
+    mu0_4 = -p_r
+    mu1_3 = p_r
+    _require_finite(M3_3, M4_4, M5_5, mu1_3, mu0_4)
+    if not M3_3 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M4_4 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M5_5 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    X3_1 = mu1_3/M3_3
+    X4_0 = mu0_4/M4_4
+    C0_0 = 1.0 + mu0_4*X4_0
+    C1_1 = 1.0 + mu1_3*X3_1
+    if not C0_0 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not C1_1 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    out = [0.0] * 3
+    out[0] = 0.0
+    out[1] = 0.0
+    out[2] = 0.0
+    return out
+
+
 def constraint_residual(q, v, p):
     """constraint residual mu(q) v (zero on the constraint distribution D).
 
@@ -308,6 +481,22 @@ def constraint_residual(q, v, p):
     out[..., 0] = -v_omega_y*p_r + v_v_x
     out[..., 1] = v_omega_x*p_r + v_v_y
     out[..., 2] = v_v_z
+    return out
+
+
+def _one_constraint_residual(q, v, p):
+    """constraint_residual for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    v_v_x = v[0]
+    v_v_y = v[1]
+    v_v_z = v[2]
+    v_omega_x = v[3]
+    v_omega_y = v[4]
+    p_r = p[2]
+    out = [0.0] * 3
+    out[0] = -v_omega_y*p_r + v_v_x
+    out[1] = v_omega_x*p_r + v_v_y
+    out[2] = v_v_z
     return out
 
 
@@ -343,6 +532,19 @@ def dpsi_rough_wall(q):
     out[..., 3] = 0.0
     out[..., 4] = 0.0
     out[..., 5] = 0.0
+    return out
+
+
+def _one_dpsi_rough_wall(q):
+    """dpsi_rough_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    out = [0.0] * 6
+    out[0] = 1.0
+    out[1] = 0.0
+    out[2] = 0.0
+    out[3] = 0.0
+    out[4] = 0.0
+    out[5] = 0.0
     return out
 
 
