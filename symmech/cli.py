@@ -722,7 +722,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    common = argparse.ArgumentParser(add_help=False)
+    common = _Parser(add_help=False)
     common.add_argument(
         "--quiet", action="store_true", default=argparse.SUPPRESS, help="no progress on stderr"
     )

@@ -102,6 +102,8 @@ class Scene:
     """
 
     __slots__ = ("__derived", "__weakref__", "_decl")
+    _decl: Declaration
+    __derived: dict[tuple, Any]
 
     def __init__(
         self,

@@ -1319,13 +1319,13 @@ class _Loader:
                     for j, e in enumerate(c)
                 ]
                 ok &= all(e is not None for e in row)
-                out.append(row)  # type: ignore[arg-type]
+                out.append(row)
             else:
                 at = self.loc.element(line, c)
                 self.field_lines[label] = at
                 expr = self.expression(c, label, at, self.table)
                 ok &= expr is not None
-                out.append(expr)  # type: ignore[arg-type]
+                out.append(expr)
         return out if ok else None
 
     def force_list(self, raw: object, n: int) -> list[sp.Expr] | None:
@@ -1348,7 +1348,7 @@ class _Loader:
             at = self.loc.element(line, e)
             self.field_lines[f"forces[{k}]"] = at
             out.append(self.expression(e, f"forces[{k}]", at, self.table))
-        return None if any(e is None for e in out) else out  # type: ignore[return-value]
+        return None if any(e is None for e in out) else out
 
     def walls(self, n: int) -> list[Wall]:
         raw = self.data.get("walls", [])

@@ -127,7 +127,7 @@ def numpy_fast(
         args = _plain_arguments(state, params, spec.takes_parameters, checks)
         if args is None:
             return None
-        values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined,union-attr]
+        values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
         if spec.takes_parameters:
             p = values[-1]
             if not all(isfinite(p[r.index]) and r.holds_value(p[r.index]) for r in rules):
@@ -173,7 +173,7 @@ def c_raw(
             + ([ptr] if spec.takes_inputs else [])
             + [ptr]
         ),
-    )(ctypes.cast(symbol, ctypes.c_void_p).value)
+    )(ctypes.cast(symbol, ctypes.c_void_p).value or 0)
     batch.argtypes = (
         [ctypes.c_long]
         + [ptr] * nstate

@@ -83,7 +83,14 @@ class GeneratedCode:
         """Operations after CSE of every function (``sympy.count_ops``)."""
         return {f.name: f.operations for f in self.functions}
 
-    def load(self, **options: object) -> SceneModule:
+    def load(
+        self,
+        *,
+        compiler: str | None = None,
+        flags: Sequence[str] | None = None,
+        cache: str | Path | None = None,
+        extension: bool = True,
+    ) -> SceneModule:
         """Compile and load (C: gcc, cached shared library, ctypes) or import (NumPy).
 
         Options: ``cache`` (the folder of compiled libraries and imported modules, see
@@ -94,7 +101,9 @@ class GeneratedCode:
         """
         from symmech.codegen.module import load_generated
 
-        return load_generated(self, **options)
+        return load_generated(
+            self, compiler=compiler, flags=flags, cache=cache, extension=extension
+        )
 
 
 def generate(

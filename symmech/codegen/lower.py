@@ -51,7 +51,7 @@ unrolled code performs (``solve_flops``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import sympy as sp
@@ -329,12 +329,13 @@ def lower(
         # unroll the step over the structure of its inputs, then keep only the entries
         # it reads (they become locals; constants are folded into the unrolled code)
         shapes = {b.name: b.shape for b in f.blocks}
-        structure: dict[str, tuple[tuple[int, ...], list[float | None]]] = {
-            name: (shapes[name], []) for name in STEP_INPUTS[f.step]
-        }
+        values: dict[str, list[float | None]] = {name: [] for name in STEP_INPUTS[f.step]}
         for (blk, _, _), e in zip(where, entries, strict=True):
-            if blk in structure:
-                structure[blk][1].append(_constant(e))
+            if blk in values:
+                values[blk].append(_constant(e))
+        structure: dict[str, tuple[tuple[int, ...], Sequence[float | None]]] = {
+            name: (shapes[name], values[name]) for name in values
+        }
         program = trace_step(f.step, f.step_args, structure)
         needed = {(i.block, i.flat) for i in program.inputs}
         keep = [i for i, (blk, flat, _) in enumerate(where) if (blk, flat) in needed]
@@ -381,6 +382,9 @@ def lower(
     read = {k for k, _, _ in unpack}
     solve: tuple[str, ...] = ()
     flops = 0
+    assignments: tuple[tuple[str, int, str, tuple[int, ...]], ...] = ()
+    blocks: tuple[tuple[str, int], ...] = ()
+    block_shapes: tuple[tuple[str, tuple[int, ...]], ...] = ()
     if check:
         assert program is not None
         exprs = {(blk, flat): text for blk, flat, text, _ in printed if blk == "M"}
@@ -395,9 +399,6 @@ def lower(
         flops = program.flops
         if program.reads_state("v"):
             read.add("v")
-        assignments: tuple[tuple[str, int, str, tuple[int, ...]], ...] = ()
-        blocks: tuple[tuple[str, int], ...] = ()
-        block_shapes: tuple[tuple[str, tuple[int, ...]], ...] = ()
     else:
         assignments = printed
         blocks = tuple((b.name, b.size) for b in f.blocks if b.name != "out")

@@ -96,6 +96,8 @@ class SceneModule:
         self._spec = {f.name: f for f in code.functions}
         self._by_wall = {(f.kind, f.wall_index): f.name for f in code.functions if f.wall}
         self._rules: tuple[ParameterRule, ...] = code.parameter_rules
+        #: the loaded C library, kept alive as long as the module (None for NumPy)
+        self._library: object = None
 
     @property
     def functions(self) -> tuple[str, ...]:

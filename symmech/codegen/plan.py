@@ -39,7 +39,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
@@ -53,6 +53,7 @@ from symmech.errors import SymmechError
 from symmech.impacts.stability import stable_coefficient
 
 if TYPE_CHECKING:
+    from symmech.impacts import ImpactMap
     from symmech.scene import Scene
 
 __all__ = [
@@ -285,7 +286,7 @@ def _check_constants(scene: Scene, constants: Mapping) -> dict[sp.Symbol, sp.Exp
     by_name = {p.name: p for p in scene.parameters}
     for key, value in constants.items():
         sym = by_name.get(key) if isinstance(key, str) else key
-        if sym not in scene.parameters:
+        if sym is None or sym not in scene.parameters:
             raise CodegenError(
                 f"constants: {key!r} is not a parameter of scene {scene.name!r}"
                 f" (parameters: {[p.name for p in scene.parameters]})"
@@ -647,7 +648,7 @@ def _build(
         label = f"wall {w.name!r}"
         grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in q]])
         psi_t = sp.diff(w.psi, TIME)
-        where = {"wall": w.name, "wall_index": w.index}
+        where: dict[str, Any] = {"wall": w.name, "wall_index": w.index}
         if "psi" in wanted:
             add(
                 wall_function_name("psi", wid),
@@ -770,7 +771,7 @@ def _energy(M: sp.Matrix, v: Sequence[sp.Symbol], V: sp.Expr) -> sp.Expr:
     return sp.Add(*terms, V)
 
 
-def _energy_law_map(scene: Scene, wall) -> object:
+def _energy_law_map(scene: Scene, wall) -> ImpactMap:
     """The closed-form impact map of an energy-law wall under ``linear_solve`` (there is
     no linear system to solve for it), within :data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`;
     over budget a :class:`CodegenError` names the wall and the budget."""

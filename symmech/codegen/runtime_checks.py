@@ -210,10 +210,9 @@ def real_array(value: object, what: str) -> np.ndarray:
     converted (integers, float16/32, long double, big-endian), while complex, boolean,
     string, bytes, datetime and masked values are refused, as is anything NumPy cannot
     turn into a regular array of numbers."""
-    kind = type(value)
-    if kind is np.ndarray and value.dtype == np.float64 and value.dtype.isnative:  # type: ignore[union-attr]
-        return value  # type: ignore[return-value]
-    if (kind is list or kind is tuple) and all(type(x) in _PLAIN for x in value):  # type: ignore[union-attr]
+    if type(value) is np.ndarray and value.dtype == np.float64 and value.dtype.isnative:
+        return value
+    if (type(value) is list or type(value) is tuple) and all(type(x) in _PLAIN for x in value):
         try:
             return np.array(value, dtype=np.float64)  # a flat list of Python floats and ints
         except OverflowError:
@@ -231,10 +230,10 @@ def real_array(value: object, what: str) -> np.ndarray:
             a = np.asarray(value)
     except (ValueError, TypeError) as exc:
         raise CodegenError(f"{what}: not a regular array of real numbers ({exc})") from None
-    kind = a.dtype.kind
-    if kind in "fiu":
+    dkind = a.dtype.kind
+    if dkind in "fiu":
         return a.astype(np.float64, copy=False)
-    if kind == "O":
+    if dkind == "O":
         for x in a.flat:
             if isinstance(x, _REFUSED_SCALARS) or not isinstance(x, numbers.Real | sp.Basic):
                 raise CodegenError(
@@ -248,5 +247,5 @@ def real_array(value: object, what: str) -> np.ndarray:
             raise CodegenError(f"{what}: not an array of real numbers ({exc})") from None
     kinds = {"b": "booleans", "c": "complex numbers", "U": "strings", "S": "bytes"}
     raise CodegenError(
-        f"{what}: {kinds.get(kind, 'values')} of dtype {a.dtype} are not real numbers"
+        f"{what}: {kinds.get(dkind, 'values')} of dtype {a.dtype} are not real numbers"
     )

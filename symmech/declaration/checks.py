@@ -16,6 +16,7 @@ import itertools
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
@@ -357,7 +358,8 @@ def check_metric(
             return
     except RecursionError:  # an absurdly deep expression: judge it at sampled points
         pass
-    singular_at, failure = [], None
+    singular_at: list[tuple[Any, str]] = []
+    failure: tuple[Any, Any] | None = None
     evaluated = 0
     for point in pts:
         try:
@@ -375,15 +377,15 @@ def check_metric(
             return
         if verdict == "singular":
             singular_at.append((point, evidence))
-    if not evaluated:
-        exc, point = failure
-        i, j = exc.index
+    if not evaluated and failure is not None:
+        error, point = failure
+        i, j = error.index
         problems.add(
-            f"{label}: entry [{i},{j}] = {short(G[i, j])} {exc.reason}{_at(point, G)};"
+            f"{label}: entry [{i},{j}] = {short(G[i, j])} {error.reason}{_at(point, G)};"
             " positive definiteness cannot be checked (rescale the units, or"
             " write the entry so that it has a finite value)"
         )
-    elif len(singular_at) == evaluated:
+    elif evaluated and len(singular_at) == evaluated:
         point, evidence = singular_at[0]
         problems.add(
             f"{label}: singular (determinant identically 0): singular at every sampled point"

@@ -137,7 +137,7 @@ def _float_value(value: sp.Expr) -> float | None:
     args = [_float_value(a) for a in value.args]
     if any(a is None for a in args):
         return None
-    return fn(*args)  # type: ignore[arg-type]
+    return fn(*args)
 
 
 @dataclass(frozen=True)
@@ -166,9 +166,10 @@ def range_problem(constant: sp.Expr) -> str | None:
             return None
     elif constant.is_NumberSymbol:
         return None  # pi, E, EulerGamma, ...
-    x = float_value(constant)
-    if x is None:
+    value = float_value(constant)
+    if value is None:
         return None
+    x = value
     if not math.isfinite(x):
         return "outside the range of float64 (magnitude above about 1.8e308)"
     if x == 0.0 and constant.is_zero is False:

@@ -45,7 +45,7 @@ import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 import mpmath
 import numpy as np
@@ -132,9 +132,10 @@ def _interval(e: sp.Basic, fixed: Mapping, memo: dict) -> mpmath.ctx_iv.ivmpf | 
         out = _assumed_range(e)
     elif e.is_Add or e.is_Mul:
         parts = [_interval(a, fixed, memo) for a in e.args]
-        if all(p is not None for p in parts):
-            out = parts[0]
-            for p in parts[1:]:
+        known = [p for p in parts if p is not None]
+        if len(known) == len(parts):
+            out = known[0]
+            for p in known[1:]:
                 out = out + p if e.is_Add else out * p
     elif e.is_Pow:
         out = _power(e, fixed, memo)
@@ -452,7 +453,9 @@ def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
     try:
         with mpmath.workprec(53):
             memo: dict = {}
-            A = [[_interval(G[i, j], fixed, memo) for j in range(n)] for i in range(n)]
+            A: list[list[Any]] = [
+                [_interval(G[i, j], fixed, memo) for j in range(n)] for i in range(n)
+            ]
             if any(a is None for row in A for a in row):
                 return False
             # g is symmetric (checked before): g_ij and g_ji enclose the same values

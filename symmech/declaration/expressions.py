@@ -341,7 +341,9 @@ class _Source:
         """The text of a one-line ``node`` exactly as written (None if it spans lines)."""
         lineno, end_lineno = getattr(node, "lineno", None), getattr(node, "end_lineno", None)
         col, end_col = getattr(node, "col_offset", None), getattr(node, "end_col_offset", None)
-        if None in (lineno, col, end_col) or lineno != end_lineno or lineno > len(self.lines):
+        if lineno is None or col is None or end_col is None:
+            return None
+        if lineno != end_lineno or lineno > len(self.lines):
             return None
         if self._encoded is None:
             self._encoded = [line.encode("utf-8") for line in self.lines]
@@ -353,7 +355,9 @@ class _Source:
         end_lineno = getattr(node, "end_lineno", None)
         col = getattr(node, "col_offset", None)
         end_col = getattr(node, "end_col_offset", None)
-        if None in (lineno, end_lineno, col, end_col) or end_lineno > len(self.lines):
+        if lineno is None or end_lineno is None or col is None or end_col is None:
+            return type(node).__name__
+        if end_lineno > len(self.lines):
             return type(node).__name__
         if self._encoded is None:
             self._encoded = [line.encode("utf-8") for line in self.lines]

@@ -29,6 +29,7 @@ from __future__ import annotations
 import cmath
 import math
 from collections.abc import Mapping, Sequence
+from typing import Any
 
 import mpmath
 import numpy as np
@@ -176,7 +177,8 @@ def evaluate_matrix(M: sp.MatrixBase, point: Mapping) -> np.ndarray:
     Raises :class:`EvaluationError` with the entry's index when an entry has no finite
     float64 value.
     """
-    env, memo = dict(point), {}
+    env: dict = dict(point)
+    memo: dict = {}
     out = np.empty((M.rows, M.cols), dtype=complex)
     for i in range(M.rows):
         for j in range(M.cols):
@@ -291,7 +293,8 @@ def evaluate_matrix_mp(
     :class:`EvaluationError` with the entry's index when an entry cannot be evaluated
     (``exp(exp(exp(1000)))`` has more digits in its exponent than memory holds).
     """
-    env, memo = dict(point), {}
+    env: dict = dict(point)
+    memo: dict = {}
     rows = []
     with mpmath.workdps(digits):
         for i in range(M.rows):
@@ -339,7 +342,7 @@ def vanishes(expr: sp.Basic, points: Sequence[Mapping], digits: int = MP_DIGITS)
 # -- definiteness --------------------------------------------------------------------------
 
 
-def classify_symmetric(A: Sequence[Sequence[object]]) -> tuple[str, str]:
+def classify_symmetric(A: Sequence[Sequence[Any]]) -> tuple[str, str]:
     """Classify a real symmetric matrix: ``("positive definite" | "singular" | "indefinite",
     evidence)``.
 
@@ -353,13 +356,13 @@ def classify_symmetric(A: Sequence[Sequence[object]]) -> tuple[str, str]:
     n = len(A)
     if all(isinstance(x, float) for row in A for x in row):
         F = np.array(A, dtype=float)
-        d = np.diag(F)
-        if (d > 0).all():
-            s = np.sqrt(d)
+        fd = np.diag(F)
+        if (fd > 0).all():
+            fs = np.sqrt(fd)
             with np.errstate(all="ignore"):
-                B = F / s[:, None] / s[None, :]
-            if np.isfinite(B).all():
-                return _classify_unit_diagonal(B)
+                FB = F / fs[:, None] / fs[None, :]
+            if np.isfinite(FB).all():
+                return _classify_unit_diagonal(FB)
     d = [A[i][i] for i in range(n)]
     neg = [i for i in range(n) if d[i] < 0]
     if neg:

@@ -196,11 +196,11 @@ def declare(
     problems = Problems()
     constraint_items = _items(constraints)
     forces = _listed(forces)
-    walls = _listed(walls)
+    walls_in: object = _listed(walls)
     dyn = dynamic_translation(
         coordinates,
         quasi_velocities,
-        (metric, kinetic_energy, potential, forces, frame, constraint_items, walls),
+        (metric, kinetic_energy, potential, forces, frame, constraint_items, walls_in),
     )
     if dyn is not None:
         coordinates, quasi_velocities = dyn.coordinates, dyn.quasi_velocities
@@ -212,16 +212,16 @@ def declare(
         constraint_items = [
             dyn.expr(c, f"constraints[{a}]") for a, c in enumerate(constraint_items)
         ]
-        if isinstance(walls, Wall):
-            walls = [walls]
-        if isinstance(walls, list | tuple):
-            walls = [dyn.wall(w, f"walls[{k}]") for k, w in enumerate(walls)]
+        if isinstance(walls_in, Wall):
+            walls_in = [walls_in]
+        if isinstance(walls_in, list | tuple):
+            walls_in = [dyn.wall(w, f"walls[{k}]") for k, w in enumerate(walls_in)]
 
     # -- stage 1: structure ----------------------------------------------------------------
     q = _coordinate_symbols(coordinates)
     n = len(q)
     qd = tuple(velocity_of(c) for c in q)
-    wall_list = _wall_items(walls, problems)
+    wall_list = _wall_items(walls_in, problems)
     v = _velocity_basis(frame, quasi_velocities, q, qd, problems)
     basis_ok = v is not None
     v = v if v is not None else qd
@@ -421,7 +421,7 @@ def _coordinate_symbols(coordinates: object) -> tuple[sp.Symbol, ...]:
     if isinstance(coordinates, sp.Symbol):
         coordinates = (coordinates,)
     try:
-        q = tuple(coordinates)
+        q: tuple = tuple(coordinates)  # type: ignore[arg-type]
     except TypeError:
         raise SceneError(
             f"coordinates: expected a sequence of sympy Symbols, got {coordinates!r}"
@@ -459,7 +459,7 @@ def _velocity_basis(
     if isinstance(quasi_velocities, sp.Symbol):
         quasi_velocities = (quasi_velocities,)
     try:
-        v = tuple(quasi_velocities)
+        v: tuple = tuple(quasi_velocities)  # type: ignore[arg-type]
     except TypeError:
         problems.add(f"quasi_velocities: expected {n} sympy Symbols, got {quasi_velocities!r}")
         return None
@@ -498,7 +498,7 @@ def _explicit_parameters(
     if isinstance(parameters, sp.Symbol):
         parameters = (parameters,)
     try:
-        given = tuple(parameters)
+        given: tuple = tuple(parameters)  # type: ignore[arg-type]
     except TypeError:
         problems.add(f"parameters: expected a sequence of sympy Symbols, got {parameters!r}")
         return ()
@@ -546,7 +546,7 @@ def _items(constraints: object) -> list[object]:
     if isinstance(constraints, (str, sp.Basic)):
         return [constraints]
     try:
-        return list(constraints)
+        return list(constraints)  # type: ignore[call-overload]
     except TypeError:
         return [constraints]
 
@@ -567,7 +567,7 @@ def _wall_items(walls: object, problems: Problems) -> list[object]:
     if isinstance(walls, Wall):
         return [walls]
     try:
-        return list(walls)
+        return list(walls)  # type: ignore[call-overload]
     except TypeError:
         problems.add(f"walls: expected a list of symmech.Wall, got {walls!r}")
         return []
@@ -596,13 +596,14 @@ def _raw_matrix(value: object, field: str, n: int, problems: Problems) -> list |
         )
         return None
     else:
-        rows = [
+        maybe = [
             list(r) if hasattr(r, "__iter__") and not isinstance(r, (str, bytes)) else None
             for r in value
         ]
-        if any(r is None for r in rows):
+        if any(r is None for r in maybe):
             problems.add(f"{field}: expected a matrix given as a list of rows, got {value!r}")
             return None
+        rows = [r for r in maybe if r is not None]
         if len({len(r) for r in rows}) > 1:
             problems.add(f"{field}: rows of different lengths {[len(r) for r in rows]}")
             return None

@@ -52,7 +52,7 @@ class VelocitySymbol(sp.Symbol):
     def __eq__(self, other: object) -> bool:
         if self is other:
             return True
-        if type(other) is sp.Symbol or type(other) is VelocitySymbol:
+        if isinstance(other, sp.Symbol) and type(other) in (sp.Symbol, VelocitySymbol):
             return self._hashable_content() == other._hashable_content()
         return sp.Symbol.__eq__(self, other)
 

@@ -22,7 +22,7 @@ units of psi and of the scale of the coordinates near 1.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import mpmath as mp
 import sympy as sp
@@ -41,7 +41,7 @@ _STARTS = (0, 1, -1, 2, -2)
 _NEWTON_STEPS = 30
 
 
-def _secant_root(fn: object, starts: Sequence, dps: int) -> sp.Float | None:
+def _secant_root(fn: Callable, starts: Sequence, dps: int) -> sp.Float | None:
     with mp.workdps(dps + 10):
         for x0 in starts:
             try:
@@ -102,7 +102,7 @@ def _is_root(f: sp.Expr, qj: sp.Symbol, s: mp.mpf, dps: int) -> bool:
     ]
     if any(v is None for v in values):
         return False
-    f0, fp, fm = (v[0] for v in values)
+    f0, fp, fm = (v[0] for v in values if v is not None)
     return abs(f0) <= mp.mpf(10) ** -12 * min(abs(fp), abs(fm))
 
 

@@ -100,7 +100,7 @@ def adjugate_det(
     top: list[dict] = [{(): one}]
     for k in range(1, n):
         top.append(_expand(A[k - 1], top[k - 1], k, k - 1, zero, cols, keep))
-    bottom: list[dict | None] = [None] * (n + 1)
+    bottom: list[dict] = [{} for _ in range(n + 1)]  # bottom[0] is never read
     bottom[n] = {(): one}
     for r in range(n - 1, 0, -1):
         bottom[r] = _expand(A[r], bottom[r + 1], n - r, 0, zero, cols, keep)

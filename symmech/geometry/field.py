@@ -140,11 +140,11 @@ class RationalField:
                         replaced.append(dummy)
         #: why the field declined (None when it exists): a budget of symmech.algebra.budget
         self.declined: str | None = _over_budget(replaced)
+        #: the sympy domain (a fraction field, or an exact ring/field), None when inexact
+        self.K: Any = None
         if self.declined is None:
             K, _ = construct_domain(replaced, field=True)
             self.K = None if K.is_EX or K.is_EXRAW else K
-        else:
-            self.K = None
         self.pairs: list[tuple[int, int]] = []
         self._powers: dict[tuple[int, int], Any] = {}
         self._exprs: dict[Any, sp.Expr] = {}

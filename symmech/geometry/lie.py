@@ -32,7 +32,7 @@ from __future__ import annotations
 import numbers
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeAlias
 
 import mpmath
 import sympy as sp
@@ -71,7 +71,7 @@ _REL_TOL = mpmath.mpf(10) ** -25
 _MIN_BITS = 20
 _ZERO_ABS = sp.Float(10, _DPS) ** -60
 
-Field = sp.MatrixBase | Sequence[Any]
+Field: TypeAlias = sp.MatrixBase | Sequence[Any]
 Point = Mapping[sp.Symbol, Any]
 
 
@@ -432,7 +432,7 @@ def _sample(columns: Sequence[sp.MatrixBase], points: Sequence[Point] | None) ->
     syms: set[sp.Symbol] = set()
     for col in columns:
         syms |= col.free_symbols
-    return sample_points(syms, count=_SAMPLES)
+    return list(sample_points(syms, count=_SAMPLES))
 
 
 def _note(label: str, r: _Rank) -> list[str]:

@@ -170,7 +170,7 @@ class _Core:
         lam_d, Ar = field.matrix(dpsi.col_join(nu)).clear_denoms_rowwise(convert=True)
         self.lam = [lam_d[i, i].element for i in range(k)]
         self.mu_den: list[Poly] = []
-        MUr = None
+        MUr: Any = None
         if m:
             mu_d, MUr = field.matrix(mu).clear_denoms_rowwise(convert=True)
             self.mu_den = [mu_d[i, i].element for i in range(m)]

@@ -177,7 +177,8 @@ class _Algebra:
         if self.degrees:
             k = sum(abs(c) for _, c in angles)
             cs = DegreeBound(2 * k, 2 * k)
-            c = s = cs
+            c: Any = cs
+            s: Any = cs
         else:
             z = _Gauss(Fraction(1), Fraction(0))
             for u, k in angles:
