@@ -32,6 +32,7 @@ from symmech.scenefile import (
     load_scene,
     loads_scene,
     read_scene,
+    reads_scene,
     save_scene,
 )
 
@@ -80,6 +81,7 @@ __all__ = [
     "loads_scene",
     "parse_expression",
     "read_scene",
+    "reads_scene",
     "save_scene",
     "shapes",
     "t",

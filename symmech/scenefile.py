@@ -2,9 +2,11 @@ r"""Scene files: a mechanical system written in TOML, loaded without executing a
 
 A scene file holds exactly what :class:`symmech.Scene` takes (coordinates, a metric or a
 kinetic energy, a potential, constraints, a frame of quasi-velocities, walls), plus default
-values for the parameters and functions of time.  :func:`load_scene` returns the
-:class:`~symmech.Scene`; :func:`read_scene` returns a :class:`SceneFile` that also carries
-the defaults, the functions and the description; :func:`dump_scene` writes a Scene back.
+values for the parameters and functions of time.  :func:`load_scene` (a path) and
+:func:`loads_scene` (text) return the :class:`~symmech.Scene`; :func:`read_scene` and
+:func:`reads_scene` return a :class:`SceneFile` that also carries the defaults, the
+functions and the description; :func:`save_scene` and :func:`dump_scene` write a Scene
+back.
 
 Format (version 1)
 ------------------
@@ -108,7 +110,7 @@ on the line within it.  A key written in an unusual way (inside an inline table,
 with line-ending backslashes) may get the line of its table or no line at all: the field
 name is always given.  Keys and tokens echoed in messages are cut to 60 characters.
 
->>> sf = loads_scene('''
+>>> sf = reads_scene('''
 ... coordinates = ["x"]
 ... metric = ["m"]
 ... potential = "k*x**2/2"
@@ -123,7 +125,7 @@ Scene('oscillator': q=[x])
 
 Nothing in a file is run; what is not a plain expression is refused, with its place:
 
->>> loads_scene('coordinates = ["x"]\nmetric = ["().__class__"]', source="evil.toml")
+>>> reads_scene('coordinates = ["x"]\nmetric = ["().__class__"]', source="evil.toml")
 Traceback (most recent call last):
 ...
 symmech.scenefile.SceneFileError: evil.toml: metric[0,0] (line 2, col 1): attribute access '().__class__' is not allowed
@@ -176,6 +178,7 @@ __all__ = [
     "load_scene",
     "loads_scene",
     "read_scene",
+    "reads_scene",
     "save_scene",
 ]
 
@@ -564,7 +567,7 @@ class SceneFile:
     description:
         The file's description ("" when it has none).
     path:
-        The file read, or None for text given to :func:`loads_scene`.
+        The file read, or None for text given to :func:`reads_scene`.
     """
 
     scene: Scene
@@ -682,13 +685,20 @@ def read_scene(path: str | os.PathLike[str]) -> SceneFile:
     return _load(text, source=source, default_name=stem[:_MAX_IDENTIFIER], path=p)
 
 
-def loads_scene(text: str, *, name: str = "scene", source: str = "<string>") -> SceneFile:
+def reads_scene(text: str, *, name: str = "scene", source: str = "<string>") -> SceneFile:
     """Load a scene from TOML ``text``; ``name`` is used when the text has no ``name``."""
     if not isinstance(text, str):
         raise SceneFileError([f"{source}: expected TOML text, got a {type(text).__name__}"])
     if len(text.encode("utf-8", errors="replace")) > MAX_FILE_BYTES:
         raise SceneFileError([f"{source}: text is longer than {MAX_FILE_BYTES} bytes"])
     return _load(text, source=source, default_name=name, path=None)
+
+
+def loads_scene(text: str, *, name: str = "scene", source: str = "<string>") -> Scene:
+    """The Scene of a scene file given as text: :func:`load_scene` for text, as
+    :func:`reads_scene` is :func:`read_scene` for text (the :class:`SceneFile` with the
+    parameters' defaults, the functions and the description)."""
+    return reads_scene(text, name=name, source=source).scene
 
 
 def _toml_type(value: object) -> str:

@@ -250,8 +250,8 @@ def test_stable_coefficient_structural_shortcut_agrees_with_the_full_step():
 @pytest.mark.parametrize(
     ("build", "stage"),
     [
-        (lambda: sm.loads_scene(POWER_64).scene, "closed-form acceleration"),
-        (lambda: sm.loads_scene(DENSE_TRIG_3).scene, "closed-form inverse of the metric"),
+        (lambda: sm.reads_scene(POWER_64).scene, "closed-form acceleration"),
+        (lambda: sm.reads_scene(DENSE_TRIG_3).scene, "closed-form inverse of the metric"),
         (lambda: cart_with_tip_wall(3), "closed-form inverse of the metric"),
         (chaplygin_ball_wall, "closed-form inverse of the metric"),
     ],
@@ -269,7 +269,7 @@ def test_explicit_closed_form_over_budget_is_refused_at_once(build, stage):
 
 
 def test_auto_falls_back_to_linear_solve_and_says_so():
-    scene = sm.loads_scene(DENSE_TRIG_3).scene
+    scene = sm.reads_scene(DENSE_TRIG_3).scene
     code = codegen.generate(scene, "numpy")
     assert code.plan.strategy == "linear_solve"
     assert code.plan.fallback is not None and "CLOSED_FORM_TERMS" in code.plan.fallback

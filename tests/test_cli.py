@@ -20,7 +20,7 @@ import pytest
 import sympy as sp
 
 from symmech.examples import EXAMPLES
-from symmech.scenefile import loads_scene, read_scene
+from symmech.scenefile import read_scene, reads_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 # Issue 5: "at least the bouncing ellipse, the spinning disk of text 001, Examples 3.7,
@@ -307,7 +307,7 @@ def test_export_to_stdout_moving_wall(tmp_path: Path):
     proc = symmech("export", "carnot_4_4", "--quiet", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr == ""
-    sf = loads_scene(proc.stdout)
+    sf = reads_scene(proc.stdout)
     f = sp.Function("f", real=True)(sp.Symbol("t", real=True))
     assert sf.scene.walls[0].psi == X - f
     assert sf.functions == {"f": f}

@@ -18,7 +18,7 @@ import sympy as sp
 
 from symmech.cli import derivation
 from symmech.geometry.lie import bracket_rank, is_involutive
-from symmech.scenefile import load_scene, loads_scene
+from symmech.scenefile import load_scene, reads_scene
 
 # ---------------------------------------------------------------------------------------
 # a structural LaTeX checker
@@ -261,7 +261,7 @@ def test_derivation_latex_and_markdown(name: str):
 
 
 def test_derivation_notes_are_latex_text():
-    seven = loads_scene(
+    seven = reads_scene(
         'coordinates = ["r", "th", "z1", "z2", "z3", "z4", "z5"]\n'
         'metric = [1, "r**2", 1, 1, 1, 1, 1]\n'
     ).scene

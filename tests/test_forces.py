@@ -203,15 +203,15 @@ c = 0.1
 [functions]
 u = {}
 """
-    sf = sm.loads_scene(text, name="osc")
+    sf = sm.reads_scene(text, name="osc")
     (x,) = sf.scene.coordinates
     u = sp.Function("u", real=True)(sm.t)
     c, k = sp.symbols("c k", positive=True)
     assert sf.scene.forcing()[0] == -c * sp.Symbol("xdot", real=True) - k * x + u
-    again = sm.loads_scene(sm.dump_scene(sf.scene)).scene
+    again = sm.reads_scene(sm.dump_scene(sf.scene)).scene
     assert again.forcing() == sf.scene.forcing()
     with pytest.raises(sm.SceneError, match=r"forces \(line 5\): expected an array of 1"):
-        sm.loads_scene(text.replace('"-c*xdot + u"', '"-c*xdot", "1"'))
+        sm.reads_scene(text.replace('"-c*xdot + u"', '"-c*xdot", "1"'))
 
 
 def test_dynamicsymbols_declare_the_same_scene():
@@ -249,7 +249,7 @@ c = 0.1
 [inputs]
 tau = { description = "the push" }
 """
-    scene = sm.loads_scene(text, name="pushed").scene
+    scene = sm.reads_scene(text, name="pushed").scene
     tau = sp.Function("tau", real=True)(sm.t)
     assert tau in scene.forcing()[0].atoms(sp.core.function.AppliedUndef)
     mod = sm.codegen.generate(scene, target="numpy").load()
@@ -258,10 +258,10 @@ tau = { description = "the push" }
         mod.acceleration([0.0], [1.0], {"m": 2, "c": 0.1}, inputs={"tau": 0.5}), [0.2]
     )
     with pytest.raises(sm.SceneError, match=r"inputs.tau \(line 9\): an input is a table"):
-        sm.loads_scene(text.replace('tau = { description = "the push" }', "tau = 3"))
+        sm.reads_scene(text.replace('tau = { description = "the push" }', "tau = 3"))
     with pytest.raises(sm.SceneError, match="declared both in"):
-        sm.loads_scene(text + "[functions]\ntau = {}\n")
+        sm.reads_scene(text + "[functions]\ntau = {}\n")
     with pytest.raises(sm.SceneError, match=r"expected a table \[inputs\]"):
-        sm.loads_scene(
+        sm.reads_scene(
             "inputs = 3\n" + text.replace('[inputs]\ntau = { description = "the push" }\n', "")
         )

@@ -59,7 +59,7 @@ def file_refused(text: str, tmp_path: Path | None = None) -> sm.SceneFileError:
         warnings.simplefilter("error")
         with pytest.raises(sm.SceneFileError) as info:
             if tmp_path is None:
-                sm.loads_scene(text)
+                sm.reads_scene(text)
             else:
                 path = tmp_path / "hostile.toml"
                 path.write_text(text)

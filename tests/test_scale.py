@@ -65,7 +65,7 @@ def test_scene_files_are_small():
 def test_diagonal_metric_with_200_coordinates_derives_and_generates_in_seconds():
     (scene, code), elapsed = _timed(
         lambda: (
-            (s := sm.loads_scene(DIAGONAL_200, source="diag200.toml").scene),
+            (s := sm.reads_scene(DIAGONAL_200, source="diag200.toml").scene),
             codegen.generate(s, "numpy"),
         )
     )
@@ -83,7 +83,7 @@ def test_diagonal_metric_with_200_coordinates_derives_and_generates_in_seconds()
 
 
 def test_wall_with_a_64th_power_gap_falls_back_at_once():
-    scene = sm.loads_scene(WALL_POWER_64).scene
+    scene = sm.reads_scene(WALL_POWER_64).scene
     code, elapsed = _timed(lambda: codegen.generate(scene, "numpy"))
     assert elapsed < GUARD, f"{elapsed:.1f} s"
     assert code.plan.strategy == "linear_solve"
@@ -100,7 +100,7 @@ def test_wall_with_a_64th_power_gap_falls_back_at_once():
 @pytest.mark.slow
 def test_a_wall_on_each_of_100_coordinates():
     """3.8 KB: 100 impact functions of a 100 x 100 metric (about 20 s here)."""
-    code, elapsed = _timed(lambda: codegen.generate(sm.loads_scene(WALLS_100).scene, "numpy"))
+    code, elapsed = _timed(lambda: codegen.generate(sm.reads_scene(WALLS_100).scene, "numpy"))
     assert elapsed < GUARD, f"{elapsed:.1f} s"
     mod = code.load()
     rng = np.random.default_rng(100)
@@ -112,7 +112,7 @@ def test_a_wall_on_each_of_100_coordinates():
 
 
 def test_power_64_potential_is_generated_by_linear_solve_at_once():
-    scene = sm.loads_scene(POWER_64).scene
+    scene = sm.reads_scene(POWER_64).scene
     code, elapsed = _timed(lambda: codegen.generate(scene, "numpy"))
     assert elapsed < GUARD, f"{elapsed:.1f} s"
     assert code.plan.strategy == "linear_solve" and "FIELD_TERMS" in code.plan.fallback
@@ -127,7 +127,7 @@ def test_power_64_potential_is_generated_by_linear_solve_at_once():
 
 
 def test_dense_trigonometric_metric_with_a_wall_generates_and_solves():
-    scene = sm.loads_scene(DENSE_TRIG_3).scene
+    scene = sm.reads_scene(DENSE_TRIG_3).scene
     code, elapsed = _timed(lambda: codegen.generate(scene, "numpy"))
     assert elapsed < GUARD, f"{elapsed:.1f} s"
     assert code.plan.strategy == "linear_solve"
@@ -151,7 +151,7 @@ def test_dense_trigonometric_metric_with_a_wall_generates_and_solves():
 def test_other_hostile_scene_files_accelerate_right(text):
     """The acceleration of the generated code (whichever strategy auto takes) against
     numpy.linalg.solve of g and f evaluated by sympy at 30 digits."""
-    scene = sm.loads_scene(text).scene
+    scene = sm.reads_scene(text).scene
     code, elapsed = _timed(lambda: codegen.generate(scene, "numpy"))
     assert elapsed < GUARD, f"{elapsed:.1f} s"
     mod = code.load()

@@ -27,6 +27,7 @@ import sympy as sp
 import sympy.parsing.sympy_parser
 from sympy.core.function import AppliedUndef
 
+import symmech as sm
 import symmech.scenefile as scenefile
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
@@ -39,8 +40,8 @@ from symmech.scenefile import (
     builtin_scene_path,
     dump_scene,
     load_scene,
-    loads_scene,
     read_scene,
+    reads_scene,
 )
 
 # Issue 5: "at least the bouncing ellipse, the spinning disk of text 001, Examples 3.7,
@@ -237,7 +238,7 @@ def test_the_comparison_sees_a_changed_scene(mutation: list[tuple[str, str]]):
     for old, new in mutation:
         assert old in text
         text = text.replace(old, new)
-    changed = loads_scene(text).scene
+    changed = reads_scene(text).scene
     with pytest.raises(AssertionError):
         assert_same_system(changed, EXAMPLES["carnot_3_7"][0]())
 
@@ -246,7 +247,7 @@ def test_the_comparison_sees_a_changed_frame():
     text = builtin_scene_path("rolling_ball").read_text(encoding="utf-8")
     old = '["cos(psi)", "sin(psi)", 0],'
     assert old in text
-    changed = loads_scene(text.replace(old, '["cos(psi)", "2*sin(psi)", 0],')).scene
+    changed = reads_scene(text.replace(old, '["cos(psi)", "2*sin(psi)", 0],')).scene
     with pytest.raises(AssertionError):
         assert_same_system(changed, EXAMPLES["rolling_ball"][0]())
 
@@ -259,7 +260,7 @@ def test_the_comparison_sees_a_changed_frame():
 def test_dump_then_load_gives_the_same_scene_file(name: str):
     sf = read_scene(name)
     text = dump_scene(sf.scene, defaults=sf.defaults, description=sf.description)
-    back = loads_scene(text)
+    back = reads_scene(text)
     assert_same_system(back.scene, sf.scene)
     assert back.defaults == sf.defaults
     assert back.description == sf.description
@@ -271,7 +272,7 @@ def test_dump_then_load_gives_the_same_scene_file(name: str):
 @pytest.mark.parametrize("name", BUILTIN)
 def test_dump_then_load_a_python_scene(name: str):
     scene = EXAMPLES[name][0]()
-    back = loads_scene(dump_scene(scene))
+    back = reads_scene(dump_scene(scene))
     assert_same_system(back.scene, scene)
     assert back.defaults == {}
 
@@ -321,7 +322,7 @@ law = "energy"
 
 
 def test_hand_written_scene_has_the_values_written():
-    sf = loads_scene(HAND_WRITTEN)
+    sf = reads_scene(HAND_WRITTEN)
     scene = sf.scene
     x, y, z = (sp.Symbol(s, real=True) for s in "xyz")
     u, w, s_ = (sp.Symbol(s, real=True) for s in ("u", "w", "s"))
@@ -355,10 +356,10 @@ def test_hand_written_scene_has_the_values_written():
 
 
 def test_hand_written_scene_round_trip():
-    sf = loads_scene(HAND_WRITTEN)
+    sf = reads_scene(HAND_WRITTEN)
     fns = {"f": sf.functions["f"]}
     text = dump_scene(sf.scene, defaults=sf.defaults, description=sf.description, functions=fns)
-    back = loads_scene(text)
+    back = reads_scene(text)
     assert_same_system(back.scene, sf.scene)
     assert back.defaults == sf.defaults
     assert back.description == sf.description
@@ -382,12 +383,12 @@ def test_scene_name_defaults_to_the_file_stem(tmp_path: Path):
     assert load_scene(tmp_path / "my_scene.toml").name == "my_scene"
     odd = load_scene(tmp_path / "2-link arm.toml").name
     assert odd == "scene_2_link_arm"
-    assert loads_scene(text, name="given").scene.name == "given"
+    assert reads_scene(text, name="given").scene.name == "given"
 
 
 def test_parameters_are_in_the_order_of_the_file():
     text = 'coordinates = ["x"]\nmetric = ["b*a"]\n[parameters]\nb = 1\na = 2\n'
-    assert [p.name for p in loads_scene(text).scene.parameters] == ["b", "a"]
+    assert [p.name for p in reads_scene(text).scene.parameters] == ["b", "a"]
 
 
 def test_scenefile_docstring_examples():
@@ -1127,10 +1128,10 @@ def test_malformed_table_is_large_enough():
 
 def test_template_itself_loads():
     """The malformed cases differ from a valid file only by what each changes."""
-    sf = loads_scene(scene_text())
+    sf = reads_scene(scene_text())
     assert sf.scene.coordinates == (sp.Symbol("x", real=True), sp.Symbol("y", real=True))
-    assert loads_scene(scene_text(tail=_frame("1"))).scene.frame == sp.eye(2)
-    assert loads_scene(_with_kinetic_energy('"m*(xdot**2 + ydot**2)/2"')).scene.n == 2
+    assert reads_scene(scene_text(tail=_frame("1"))).scene.frame == sp.eye(2)
+    assert reads_scene(_with_kinetic_energy('"m*(xdot**2 + ydot**2)/2"')).scene.n == 2
 
 
 def test_every_problem_is_listed(tmp_path: Path):
@@ -1162,9 +1163,9 @@ def test_file_level_refusals(tmp_path: Path):
     with pytest.raises(SceneFileError, match=r"did you mean 'carnot_3_7'"):
         read_scene("carnot_3_8")
     with pytest.raises(SceneFileError, match="null character"):
-        loads_scene('coordinates = ["x"]\x00')
+        reads_scene('coordinates = ["x"]\x00')
     with pytest.raises(SceneFileError, match="expected TOML text, got a bytes"):
-        loads_scene(b'coordinates = ["x"]')  # type: ignore[arg-type]
+        reads_scene(b'coordinates = ["x"]')  # type: ignore[arg-type]
 
 
 def test_byte_order_mark_and_crlf_line_ends(tmp_path: Path):
@@ -1215,9 +1216,9 @@ def test_a_folder_named_like_a_builtin_scene_does_not_hide_it(
 
 def test_scene_file_errors_are_symmech_errors():
     with pytest.raises(SymmechError):
-        loads_scene("coordinates = 1")
+        reads_scene("coordinates = 1")
     with pytest.raises(ValueError):
-        loads_scene("coordinates = 1")
+        reads_scene("coordinates = 1")
 
 
 def test_messages_never_carry_control_characters(tmp_path: Path):
@@ -1235,3 +1236,17 @@ def test_messages_never_carry_control_characters(tmp_path: Path):
     lines = text.splitlines()
     assert len(lines) == 1 + len(exc.details) == 3  # a header, then one line per problem
     assert all(line.startswith("  - ") for line in lines[1:])
+
+
+def test_load_and_read_are_symmetric_for_paths_and_text(tmp_path):
+    """load_scene / loads_scene give the Scene, read_scene / reads_scene the SceneFile,
+    for a path and for text alike; save_scene / dump_scene write it back."""
+    text = sm.dump_scene(sm.load_scene("carnot_3_7"), defaults={"m": 2})
+    path = sm.save_scene(sm.loads_scene(text), tmp_path / "c37.toml", defaults={"m": 2})
+    from_text, from_path = sm.loads_scene(text), sm.load_scene(path)
+    assert isinstance(from_text, sm.Scene) and isinstance(from_path, sm.Scene)
+    assert from_text.mass_matrix() == from_path.mass_matrix()
+    sf_text, sf_path = sm.reads_scene(text), sm.read_scene(path)
+    assert isinstance(sf_text, sm.SceneFile) and isinstance(sf_path, sm.SceneFile)
+    assert {str(k): v for k, v in sf_text.defaults.items()} == {"m": 2}
+    assert sf_text.defaults == sf_path.defaults

@@ -14,7 +14,7 @@ import sympy as sp
 
 import symmech as sm
 from symmech.declaration.symbols import t as TIME
-from symmech.scenefile import SceneFileError, dump_scene, loads_scene
+from symmech.scenefile import SceneFileError, dump_scene, reads_scene
 
 X, Y = sm.coordinates("x y")
 M, G = sp.symbols("m g", positive=True)
@@ -32,7 +32,7 @@ V = { arguments = ["x", "y"], description = "a generic potential" }
 
 
 def test_a_generic_potential_loads_and_derives():
-    sf = loads_scene(FILE)
+    sf = reads_scene(FILE)
     V = V_REAL(X, Y)
     assert sf.functions == {"V": V}
     assert sf.scene.potential == V + M * G * Y
@@ -42,7 +42,7 @@ def test_a_generic_potential_loads_and_derives():
 
 def test_arguments_may_include_time_and_real_false():
     text = FILE.replace('arguments = ["x", "y"]', 'arguments = ["t", "x"], real = false')
-    sf = loads_scene(text)
+    sf = reads_scene(text)
     assert sf.functions == {"V": sp.Function("V")(TIME, X)}
     assert sf.scene.time_dependent
 
@@ -60,7 +60,7 @@ def test_a_python_scene_with_a_generic_potential_survives_dump_and_load(potentia
     scene = sm.Scene((X, Y), metric=sp.diag(M, M), potential=potential, name="generic")
     text = dump_scene(scene)
     assert "[functions]" in text
-    back = loads_scene(text).scene
+    back = reads_scene(text).scene
     assert back.potential == potential
     assert back.forcing() == scene.forcing()
     assert dump_scene(back) == text
@@ -93,4 +93,4 @@ def test_functions_of_time_are_written_as_before():
     )
     text = dump_scene(scene)
     assert "\n[functions]\nf = {}\n" in text
-    assert loads_scene(text).scene.walls[0].psi == X - f
+    assert reads_scene(text).scene.walls[0].psi == X - f

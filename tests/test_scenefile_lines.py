@@ -12,14 +12,14 @@ import time
 import pytest
 import sympy as sp
 
-from symmech.scenefile import MAX_FILE_BYTES, SceneFileError, loads_scene
+from symmech.scenefile import MAX_FILE_BYTES, SceneFileError, reads_scene
 
 BASE = 'coordinates = ["x"]\nmetric = ["m"]\n[parameters]\nm = 1\n'
 
 
 def _refused(text: str) -> SceneFileError:
     with pytest.raises(SceneFileError) as info:
-        loads_scene(text, source="f.toml")
+        reads_scene(text, source="f.toml")
     return info.value
 
 
@@ -110,7 +110,7 @@ k = 2
 
 
 def test_a_multiline_expression_loads():
-    sf = loads_scene(ML)
+    sf = reads_scene(ML)
     m, g, k = sp.symbols("m g k", positive=True)
     x, y = sp.symbols("x y", real=True)
     assert sf.scene.potential == m * g * y + k * x**2 / 2

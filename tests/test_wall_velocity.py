@@ -155,7 +155,7 @@ def test_scene_file_wall_velocity_round_trip():
     scene = _scene(velocity=[0, sp.diff(H, sm.t), 0])
     text = sm.dump_scene(scene)
     assert "velocity = [" in text
-    again = sm.loads_scene(text).scene
+    again = sm.reads_scene(text).scene
     assert again.walls[0].velocity == scene.walls[0].velocity
     with pytest.raises(sm.SceneError, match=r"walls\[0\]\.velocity.*expected an array of 3"):
-        sm.loads_scene(text.replace("velocity = [", "velocity = [0, "))
+        sm.reads_scene(text.replace("velocity = [", "velocity = [0, "))

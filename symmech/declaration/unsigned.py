@@ -45,10 +45,13 @@ def check_metric_signs(
     """
     first = Problems()
     check_metric(G, label, points, first, q, T)
+    if not first.items:
+        return None
+    free = G.free_symbols
     unsigned = [
         p
         for p in params
-        if p in G.free_symbols
+        if p in free
         and p.is_positive is None
         and p.is_negative is None
         and p.is_zero is None
