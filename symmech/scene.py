@@ -318,7 +318,9 @@ class Scene:
         return self.kinetic_energy() + self.potential
 
     # -- geometry ---------------------------------------------------------------------------------
-    def christoffel(self, kind: int = 2, simplify: Level = "light") -> sp.ImmutableDenseNDimArray:
+    def christoffel(
+        self, kind: int = 2, *, simplify: Level = "light"
+    ) -> sp.ImmutableDenseNDimArray:
         """Christoffel symbols of the coordinate metric, an Array of shape (n, n, n).
 
         ``kind=2``: ``[k, i, j] = Gamma^k_ij``; ``kind=1``: ``[k, i, j] = Gamma_kij``
@@ -352,7 +354,7 @@ class Scene:
 
         return self._cached(("commutation",), build)
 
-    def connection_coefficients(self, simplify: Level = "light") -> sp.ImmutableDenseNDimArray:
+    def connection_coefficients(self, *, simplify: Level = "light") -> sp.ImmutableDenseNDimArray:
         """omega^m_ij with nabla_{u_i} u_j = omega^m_ij u_m, an Array [m, i, j] (slides 000).
 
         ``simplify`` as in :meth:`christoffel`.
@@ -427,7 +429,7 @@ class Scene:
             ),
         )
 
-    def multipliers(self, simplify: Level = "light") -> sp.ImmutableMatrix:
+    def multipliers(self, *, simplify: Level = "light") -> sp.ImmutableMatrix:
         """Lagrange multipliers lambda (m x 1) with ``M v_dot = f + mu^T lambda``.
 
         ``lambda = C^-1 (-mu_dot v - mu M^-1 f)`` (Carnot §2.2, sign re-derived; see
@@ -453,7 +455,7 @@ class Scene:
 
         return self._cached(("constrained", simplify), build)
 
-    def acceleration(self, simplify: Level = "light") -> sp.ImmutableMatrix:
+    def acceleration(self, *, simplify: Level = "light") -> sp.ImmutableMatrix:
         """The acceleration as an n x 1 Matrix in q, the velocities, t and the parameters.
 
         Unconstrained: ``q_ddot = -Gamma(q_dot, q_dot) - g^-1 dV`` (geodesic equation with a
@@ -504,8 +506,8 @@ class Scene:
     def impact_map(
         self,
         wall: int | str | Wall | ResolvedWall = 0,
-        law: str | None = None,
         *,
+        law: str | None = None,
         wall_velocity: Sequence | sp.MatrixBase | None = None,
     ) -> ImpactMap:
         """The closed-form impact map of ``wall`` (index, name or Wall); see :class:`ImpactMap`.

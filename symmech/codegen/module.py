@@ -65,6 +65,15 @@ if TYPE_CHECKING:
 
 __all__ = ["NumericalError", "SceneModule", "load_generated"]
 
+#: A state or time argument: anything NumPy converts to float64 (checked on the way in).
+ArrayLike = object
+#: The parameters: a sequence in the order of :attr:`SceneModule.parameters`, an array
+#: (..., k), or a mapping from their names (or Symbols).
+Params = Mapping[Any, Any] | Sequence[Any] | np.ndarray | None
+#: The run-time inputs: a sequence in the order of :attr:`SceneModule.inputs`, an array
+#: (..., k), or a mapping from their names (or their sympy objects).
+Inputs = Mapping[Any, Any] | Sequence[Any] | np.ndarray | None
+
 
 class SceneModule:
     """Generated functions of one scene (see the module docstring)."""
@@ -190,7 +199,14 @@ class SceneModule:
         return self._raw[name](tuple(state), p, tt, u)
 
     # -- the API ----------------------------------------------------------------------------
-    def call(self, name: str, *state: object, params=None, t=None, inputs=None) -> np.ndarray:
+    def call(
+        self,
+        name: str,
+        *state: object,
+        params: Params = None,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """Call the generated function ``name`` with its state arrays (q, v, or y)."""
         fast = self._fast.get(name)
         if fast is not None and t is None and inputs is None:
@@ -208,35 +224,96 @@ class SceneModule:
             raise CodegenError(f"{name} takes {len(spec.state)} state arrays {spec.state}")
         return self._call(name, arrays, params, t, inputs)
 
-    def mass_matrix(self, q, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def mass_matrix(
+        self,
+        q: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """g(q) in the velocity basis, shape (..., n, n)."""
         return self.call("mass_matrix", q, params=params, t=t, inputs=inputs)
 
-    def forcing(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def forcing(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """f(q, v, t) with g v_dot = f (unconstrained)."""
         return self.call("forcing", q, v, params=params, t=t, inputs=inputs)
 
-    def acceleration(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def acceleration(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """v_dot (constrained if the scene has constraints)."""
         return self.call("acceleration", q, v, params=params, t=t, inputs=inputs)
 
-    def rhs(self, y, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def rhs(
+        self,
+        y: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """(q_dot, v_dot) for y = (q, v)."""
         return self.call("rhs", y, params=params, t=t, inputs=inputs)
 
-    def energy(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def energy(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """T + V."""
         return self.call("energy", q, v, params=params, t=t, inputs=inputs)
 
-    def multipliers(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def multipliers(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """The Lagrange multipliers lambda (constrained scenes)."""
         return self.call("multipliers", q, v, params=params, t=t, inputs=inputs)
 
-    def constraint_residual(self, q, v, params=None, *, t=None, inputs=None) -> np.ndarray:
+    def constraint_residual(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """mu(q) v (constrained scenes)."""
         return self.call("constraint_residual", q, v, params=params, t=t, inputs=inputs)
 
-    def projectors(self, q, params=None, *, t=None, inputs=None) -> tuple[np.ndarray, np.ndarray]:
+    def projectors(
+        self,
+        q: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(P, Q), generated with ``projectors=True``."""
         P = self.call("projector_P", q, params=params, t=t, inputs=inputs)
         Q = self.call("projector_Q", q, params=params, t=t, inputs=inputs)
@@ -269,17 +346,41 @@ class SceneModule:
             )
         return name
 
-    def psi(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+    def psi(
+        self,
+        q: ArrayLike,
+        params: Params = None,
+        wall: int | str = 0,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """The gap psi(t, q) of a wall (admissible side psi >= 0)."""
         name = self._wall_function("psi", wall)
         return self.call(name, q, params=params, t=t, inputs=inputs)
 
-    def dpsi(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+    def dpsi(
+        self,
+        q: ArrayLike,
+        params: Params = None,
+        wall: int | str = 0,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """d psi / d q of a wall (coordinates)."""
         name = self._wall_function("dpsi", wall)
         return self.call(name, q, params=params, t=t, inputs=inputs)
 
-    def psi_t(self, q, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+    def psi_t(
+        self,
+        q: ArrayLike,
+        params: Params = None,
+        wall: int | str = 0,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """d psi / d t of a wall (zero for a static wall)."""
         index = self._wall(wall)
         if not self.code.plan.moving_walls[index]:
@@ -288,7 +389,16 @@ class SceneModule:
         name = self._wall_function("psi_t", index)
         return self.call(name, q, params=params, t=t, inputs=inputs)
 
-    def impact(self, q, v, params=None, wall: int | str = 0, *, t=None, inputs=None) -> np.ndarray:
+    def impact(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        wall: int | str = 0,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+    ) -> np.ndarray:
         """The post-impact velocity v+ at a wall for the pre-impact velocity v."""
         name = self._wall_function("impact", wall)
         return self.call(name, q, v, params=params, t=t, inputs=inputs)

@@ -51,10 +51,7 @@ def check_metric_signs(
     unsigned = [
         p
         for p in params
-        if p in free
-        and p.is_positive is None
-        and p.is_negative is None
-        and p.is_zero is None
+        if p in free and p.is_positive is None and p.is_negative is None and p.is_zero is None
     ]
     refused = not first.items or not all("not positive definite" in m for m in first.items)
     if refused or not unsigned:
