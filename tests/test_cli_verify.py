@@ -15,14 +15,15 @@ from dataclasses import dataclass, field
 import pytest
 import sympy as sp
 
-from symmech import cli
+from symmech import references
+from symmech import verify as cli
 
 M, I, R = (sp.Symbol(s, positive=True) for s in ("m", "I", "R"))
 XD, YD, THD = (sp.Symbol(s, real=True) for s in ("xdot", "ydot", "thetadot"))
-I1 = I + M * R**2
-BETA = (I * THD - M * R * YD) / I1
-X1 = sp.sqrt(XD**2 + YD**2 + I / M * THD**2 - (R**2 + I / M) * BETA**2)
-LOSS = M * I * (YD + R * THD) ** 2 / (2 * I1)
+# the text's formulas, from the one module that holds them (symmech.references)
+BETA = references.disk_beta(YD, THD, M, I, R)
+X1 = sp.sqrt(references.disk_energy_law_rebound_squared(XD, YD, THD, M, I, R))
+LOSS = references.disk_newton_loss(YD, THD, M, I, R)
 
 
 @dataclass

@@ -14,6 +14,7 @@ import sympy as sp
 from test_impacts_support import general_element_of_D, impact_map, is_zero, kkt, kkt_at
 
 import symmech as sm
+from symmech import references
 
 m, k, R, r = sp.symbols("m k R r", positive=True)
 alpha = sp.Symbol("alpha", nonnegative=True)
@@ -93,11 +94,11 @@ def test_example_3_12_T_C_and_energy_balance():
     result = imp.carnot()
     assert result.theorem == "Theorem 3.11"  # T~ = Q~ here
     assert is_zero(result.residual)
-    assert is_zero(result.terms["T_C"] - m * k**2 / (2 * (k**2 + R**2)) * (xd - R * thd) ** 2)
+    assert is_zero(result.terms["T_C"] - references.carnot_3_12_t_c(xd, thd, m, k, R))
     # the energy balance with the paper's T_C, from our post velocity
     T = lambda u: (u.T * sp.diag(m, m, m * k**2) * u)[0, 0] / 2  # noqa: E731
     vp = imp.post_velocity
-    T_C = m * k**2 / (2 * (k**2 + R**2)) * (xd - R * thd) ** 2
+    T_C = references.carnot_3_12_t_c(xd, thd, m, k, R)
     balance = T(vp) - T(v) + (1 - alpha) / (1 + alpha) * T(vp - v) + 2 * alpha / (1 + alpha) * T_C
     assert is_zero(balance)
     # ... and the T_C term is needed: without it (Theorem 3.6's form) it fails off the image
@@ -160,8 +161,7 @@ def test_example_3_13_post_impact_velocities():
     imp = impact_map(scene, 0)
     sub, (x0, y0, w0) = pre_in_D(v)
     post = imp.apply(sub)
-    y1 = ((k**2 + r**2) * y0 + r * k**2 * w0) / (2 * k**2 + r**2)
-    paper = sp.Matrix([-alpha * x0, y1, 0, -y1 / r, -alpha * x0 / r, y1 / r])
+    paper = references.carnot_3_13_post_velocity(x0, y0, w0, k, r, alpha)
     assert (post - paper).applyfunc(sp.cancel).is_zero_matrix
     z_vec, _ = general_element_of_D(scene)
     assert (imp.apply(list(z_vec)) - kkt(scene, 0, z_vec)).applyfunc(sp.cancel).is_zero_matrix
@@ -192,7 +192,7 @@ def test_example_3_13_T_C_and_elastic_energy_loss():
     scene, v = sphere(False)
     imp = impact_map(scene, 0)
     sub, (_x0, y0, w0) = pre_in_D(v)
-    paper_TC = k**2 * (k**2 + r**2) / (2 * r**2 * (2 * k**2 + r**2)) * (y0 - r * w0) ** 2
+    paper_TC = references.carnot_3_13_t_c(y0, w0, k, r)
     result = imp.carnot()
     assert result.theorem == "Theorem 3.11"
     assert is_zero(result.residual)
@@ -224,19 +224,8 @@ def test_example_3_13_drops_the_dependent_constraint_omega_y():
 
 
 def paper_M():
-    """Example 4.4's 6 x 6 matrix M, as printed."""
-    D1, D2 = k**2 + r**2, 2 * k**2 + r**2
-    a = alpha
-    return sp.Matrix(
-        [
-            [1 - (r**2 + a * r**2) / D1, 0, 0, 0, -(k**2) * r * (1 + a) / D1, 0],
-            [0, 1 - k**2 * r**2 / (D1 * D2), 0, k**4 * r / (D1 * D2), 0, k**2 * r / D2],
-            [0, 0, 1, 0, 0, 0],
-            [0, k**2 * r / (D1 * D2), 0, 1 - k**4 / (D1 * D2), 0, -(k**2) / D2],
-            [-r * (a + 1) / D1, 0, 0, 0, 1 - k**2 * (a + 1) / D1, 0],
-            [0, r / D2, 0, -(k**2) / D2, 0, 1 - D1 / D2],
-        ]
-    )
+    """Example 4.4's 6 x 6 matrix M, as printed (symmech.references)."""
+    return references.carnot_4_4_matrix(k, r, alpha)
 
 
 def test_example_4_4_wall_velocity_and_W():
@@ -275,7 +264,7 @@ def test_example_4_4_carnot():
     result = imp.carnot()
     assert result.theorem == "Theorem 4.3 (P(Y0) in F)"
     assert is_zero(result.residual)
-    paper_TC = k**2 * (k**2 + r**2) / (2 * r**2 * (2 * k**2 + r**2)) * (y0 - r * w0) ** 2
+    paper_TC = references.carnot_3_13_t_c(y0, w0, k, r)
     assert is_zero(result.terms["T_C'"].xreplace(sub) - paper_TC)
     restricted = imp.carnot(restrict=True)
     assert is_zero(restricted.residual)

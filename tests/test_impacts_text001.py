@@ -14,6 +14,7 @@ import sympy as sp
 from test_impacts_support import impact_map, is_zero, kkt
 
 import symmech as sm
+from symmech import references
 from symmech.declaration import shapes
 from symmech.declaration.shapes import Plane
 
@@ -140,7 +141,7 @@ def test_spinning_disk_perfectly_inelastic():
     """alpha = 0: the x velocity is absorbed, (y, th) projected onto the rolling constraint."""
     scene, (_xd, yd, thd) = disk(restitution=0)
     imp = impact_map(scene, 0)
-    beta = (I * thd - m * R * yd) / (I + m * R**2)
+    beta = references.disk_beta(yd, thd, m, I, R)
     expected = sp.Matrix([0, -R * beta, beta])
     assert all(is_zero(e) for e in imp.post_velocity - expected)
 
