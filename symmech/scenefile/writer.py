@@ -1,0 +1,357 @@
+"""Writing a Scene as a scene file: :func:`dump_scene` and :func:`save_scene`."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import sympy as sp
+from sympy.core.function import AppliedUndef
+from sympy.printing.str import StrPrinter
+
+from symmech.declaration.expressions import (
+    parse_expression,
+    to_expression,
+)
+from symmech.declaration.symbols import t as TIME
+from symmech.declaration.symbols import velocity_of
+from symmech.errors import ExpressionError
+from symmech.scene import Scene
+from symmech.scenefile.format import (
+    _IDENTIFIER,
+    _MAX_IDENTIFIER,
+    FORMAT_VERSION,
+    SIGNS,
+    SceneFileError,
+    _short,
+)
+
+# ---------------------------------------------------------------------------------------
+# writing
+
+
+_REWRITES: dict[type, Any] = {
+    sp.cot: lambda a: 1 / sp.tan(a),
+    sp.sec: lambda a: 1 / sp.cos(a),
+    sp.csc: lambda a: 1 / sp.sin(a),
+    sp.coth: lambda a: 1 / sp.tanh(a),
+    sp.sech: lambda a: 1 / sp.cosh(a),
+    sp.csch: lambda a: 1 / sp.sinh(a),
+    sp.acot: lambda a: sp.atan(1 / a),
+}
+
+
+class _FilePrinter(StrPrinter):
+    """Prints expressions in the subset :func:`parse_expression` reads back.
+
+    Applied functions of time print as their name (the scene file's convention).
+    """
+
+    def _print_Function(self, expr: sp.Function) -> str:
+        if isinstance(expr, AppliedUndef):
+            return expr.func.__name__
+        return super()._print_Function(expr)
+
+
+def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
+    expr = sp.sympify(expr)
+    for fn, rewrite in _REWRITES.items():
+        if expr.has(fn):
+            expr = expr.replace(fn, rewrite)
+    if expr.has(sp.Derivative, sp.Integral, sp.Subs):
+        raise SceneFileError([f"{where}: cannot write {_short(expr, 60)}: it holds a derivative"])
+    text = _FilePrinter().doprint(expr)
+    try:
+        back = parse_expression(text, table, field=where)
+    except ExpressionError as exc:
+        raise SceneFileError(
+            [f"{where}: cannot write {_short(expr, 60)} as a scene-file expression ({exc})"]
+        ) from None
+    if back != expr and sp.simplify(back - expr) != 0:
+        raise SceneFileError(
+            [f"{where}: {_short(expr, 60)} does not read back as itself (as {text!r})"]
+        )
+    return text
+
+
+def _toml_string(text: str) -> str:
+    out = ['"']
+    for ch in text:
+        if ch == '"':
+            out.append('\\"')
+        elif ch == "\\":
+            out.append("\\\\")
+        elif ch == "\n":
+            out.append("\\n")
+        elif ch == "\t":
+            out.append("\\t")
+        elif ord(ch) < 0x20 or ord(ch) == 0x7F:
+            out.append(f"\\u{ord(ch):04X}")
+        else:
+            out.append(ch)
+    out.append('"')
+    return "".join(out)
+
+
+def _toml_value(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
+    if isinstance(expr, sp.Integer) and abs(int(expr)) < 2**53:
+        return str(int(expr))
+    if isinstance(expr, sp.Float) and expr._prec == 53 and math.isfinite(float(expr)):
+        return repr(float(expr))  # a TOML float, read back as the same 53-bit Float
+    return _toml_string(_print_expression(expr, where, table))
+
+
+def _sign_of(symbol: sp.Symbol) -> str | None:
+    for sign, assumptions in SIGNS.items():
+        if sp.Symbol(symbol.name, **assumptions) == symbol:
+            return sign
+    return None
+
+
+def _matrix_toml(M: sp.MatrixBase, where: str, table: Mapping[str, sp.Expr]) -> str:
+    n = M.rows
+    if all(M[i, j] == 0 for i in range(n) for j in range(n) if i != j):
+        entries = ", ".join(_toml_value(M[i, i], f"{where}[{i},{i}]", table) for i in range(n))
+        return f"[{entries}]"
+    rows = [
+        "  [" + ", ".join(_toml_value(M[i, j], f"{where}[{i},{j}]", table) for j in range(n)) + "],"
+        for i in range(n)
+    ]
+    return "[\n" + "\n".join(rows) + "\n]"
+
+
+def _row_expression(row: sp.MatrixBase, v: Sequence[sp.Symbol]) -> sp.Expr:
+    return sp.Add(*[c * s for c, s in zip(row, v, strict=True)])
+
+
+def _check_function(
+    f: sp.Expr, arguments: Sequence[sp.Symbol], applied: Mapping[str, sp.Expr]
+) -> None:
+    """Refuse an applied undefined function that a scene file cannot declare."""
+    name = f.func.__name__
+    allowed = ", ".join(a.name for a in arguments)
+    if not _IDENTIFIER.match(name) or len(name) > _MAX_IDENTIFIER:
+        raise SceneFileError([f"functions: the name of {_short(f, 60)} is not an identifier"])
+    if f.func not in (sp.Function(name, real=True), sp.Function(name)):
+        raise SceneFileError(
+            [
+                f"functions: {name} has sympy assumptions that a scene file cannot write (it"
+                " declares a function real, the default, or not: real = false)"
+            ]
+        )
+    bad = [a for a in f.args if a not in arguments]
+    if not f.args or bad or len(set(f.args)) != len(f.args):
+        why = (
+            f"its argument {_short(bad[0], 60)} is not t or a coordinate"
+            if bad
+            else "it has no arguments"
+            if not f.args
+            else "an argument is repeated"
+        )
+        raise SceneFileError(
+            [
+                f"functions: cannot write {_short(f, 60)}: {why}.  A scene file declares an"
+                f" arbitrary function by its name and its arguments, distinct names among"
+                f" {allowed} (a function of an expression, of a velocity or of a parameter"
+                " would need the expression written in the file, which the format does not"
+                " have: substitute a new function of the coordinates, or a symbol, before"
+                " writing)"
+            ]
+        )
+    if name in applied and applied[name] != f:
+        raise SceneFileError(
+            [
+                f"functions: {applied[name]} and {f} have the same name; a scene file names"
+                " each function once"
+            ]
+        )
+
+
+def dump_scene(
+    scene: Scene,
+    *,
+    defaults: Mapping[sp.Symbol | str, object] | None = None,
+    description: str = "",
+    functions: Mapping[str, sp.Expr] | None = None,
+) -> str:
+    """The TOML text of ``scene`` in the scene-file format (see the module documentation).
+
+    ``defaults`` (parameter Symbol or name -> number) become the parameters' default
+    values; ``functions`` (name -> expression in t) are written as defined functions.  The
+    applied undefined functions in the scene (``f(t)``, ``V(x, y)``) are written as
+    arbitrary functions with their arguments.  The metric is written as a matrix (also for
+    a scene declared by its kinetic energy), the frame as ``matrix`` (S), constraints as
+    expressions in the velocities.  ``load``-ing the text gives a scene with the same
+    coordinates, parameters, metric, potential, frame, constraints and walls.
+
+    Raises :class:`SceneFileError` when something cannot be written (a name that is not an
+    identifier, a parameter with assumptions no ``sign`` gives, an expression outside the
+    parser's subset such as a derivative, an undefined function of something else than
+    distinct coordinates and t, such as ``V(x + y)``: the format declares a function by
+    its argument names only).
+    """
+    decl = scene.declaration
+    q, v = decl.coordinates, decl.velocities
+    defaults = dict(defaults or {})
+    by_name = {(k if isinstance(k, str) else k.name): val for k, val in defaults.items()}
+    lines = [f"# symmech scene file (format {FORMAT_VERSION}); load with symmech.load_scene"]
+    lines.append(f"format = {FORMAT_VERSION}")
+    if not _IDENTIFIER.match(decl.name):
+        raise SceneFileError([f"name: the scene name {decl.name!r} is not an identifier"])
+    lines.append(f"name = {_toml_string(decl.name)}")
+    if description:
+        lines.append(f"description = {_toml_string(description)}")
+    for s in (*q, *(v if decl.frame is not None else ())):
+        if not _IDENTIFIER.match(s.name) or sp.Symbol(s.name, real=True) != s:
+            raise SceneFileError(
+                [f"coordinates: {s.name!r} must be a real symbol named by an identifier"]
+            )
+    lines.append("coordinates = [" + ", ".join(_toml_string(s.name) for s in q) + "]")
+
+    # the symbol table for the read-back check
+    table: dict[str, sp.Expr] = {"t": TIME}
+    table.update({s.name: s for s in q})
+    table.update({velocity_of(s).name: velocity_of(s) for s in q})
+    table.update({s.name: s for s in v})
+    # a symbolic restitution is a parameter too (the Scene may not list it)
+    params = list(decl.parameters)
+    for w in decl.walls:
+        if isinstance(w.restitution, sp.Symbol) and w.restitution not in params:
+            params.append(w.restitution)
+    table.update({p.name: p for p in params})
+    applied: dict[str, sp.Expr] = {}
+    everything = [
+        *decl.metric,
+        decl.potential,
+        *decl.forces,
+        *decl.constraint_matrix,
+        *(decl.frame if decl.frame is not None else []),
+    ]
+    for w in decl.walls:
+        everything.extend([w.psi, *w.impulsive_matrix, *(w.velocity or [])])
+    arguments = (TIME, *q)
+    for e in everything:
+        for f in sorted(sp.sympify(e).atoms(AppliedUndef), key=sp.default_sort_key):
+            _check_function(f, arguments, applied)
+            applied[f.func.__name__] = f
+    table.update(applied)
+    fn_defs = dict(functions or {})
+
+    lines.append("metric = " + _matrix_toml(decl.metric, "metric", table))
+    if decl.potential != 0:
+        lines.append("potential = " + _toml_value(decl.potential, "potential", table))
+    if any(e != 0 for e in decl.forces):
+        forces = [_toml_value(e, f"forces[{k}]", table) for k, e in enumerate(decl.forces)]
+        lines.append("forces = [" + ", ".join(forces) + "]")
+    if decl.m:
+        cons = [
+            _toml_value(
+                _row_expression(decl.constraint_matrix.row(a), v), f"constraints[{a}]", table
+            )
+            for a in range(decl.m)
+        ]
+        lines.append("constraints = [" + ", ".join(cons) + "]")
+
+    unknown = sorted(set(by_name) - {p.name for p in params})
+    if unknown:
+        raise SceneFileError([f"defaults: {unknown} are not parameters of the scene"])
+    lines.append("")
+    lines.append("[parameters]")
+    for p in params:
+        sign = _sign_of(p)
+        if sign is None:
+            raise SceneFileError(
+                [f"parameters.{p.name}: its assumptions {p.assumptions0} match no sign"]
+            )
+        parts = []
+        if p.name in by_name:
+            value = by_name[p.name]
+            try:
+                # a string is parsed by the safe parser, never sympified
+                number = to_expression(value, {}, field=f"defaults[{p.name!r}]")
+            except ExpressionError as exc:
+                raise SceneFileError([str(exc)]) from None
+            if not number.is_number:
+                raise SceneFileError([f"defaults: {p.name} = {value!r} is not a number"])
+            parts.append(f"value = {_toml_value(number, f'parameters.{p.name}', {})}")
+        if sign != "positive":
+            parts.append(f"sign = {_toml_string(sign)}")
+        lines.append(f"{p.name} = {{ {', '.join(parts)} }}" if parts else f"{p.name} = {{}}")
+
+    if applied or fn_defs:
+        lines.append("")
+        lines.append("[functions]")
+        for nm, f in applied.items():
+            parts = []
+            if f.args != (TIME,):
+                parts.append("arguments = [" + ", ".join(f'"{a.name}"' for a in f.args) + "]")
+            if f.func != sp.Function(nm, real=True):
+                parts.append("real = false")
+            lines.append(f"{nm} = {{ {', '.join(parts)} }}" if parts else f"{nm} = {{}}")
+        for nm, expr in fn_defs.items():
+            lines.append(f"{nm} = {_toml_value(expr, f'functions.{nm}', table)}")
+
+    if decl.frame is not None:
+        lines.append("")
+        lines.append("[frame]")
+        lines.append("quasi_velocities = [" + ", ".join(_toml_string(s.name) for s in v) + "]")
+        rows = [
+            "  ["
+            + ", ".join(
+                _toml_value(decl.frame[i, j], f"frame.matrix[{i},{j}]", table)
+                for j in range(decl.n)
+            )
+            + "],"
+            for i in range(decl.n)
+        ]
+        lines.append("matrix = [\n" + "\n".join(rows) + "\n]")
+
+    for k, w in enumerate(decl.walls):
+        label = f"walls[{k}]"
+        lines.append("")
+        lines.append("[[walls]]")
+        if w.wall.name:
+            if not _IDENTIFIER.match(w.wall.name):
+                raise SceneFileError([f"{label}.name: {w.wall.name!r} is not an identifier"])
+            lines.append(f"name = {_toml_string(w.wall.name)}")
+        lines.append(f"psi = {_toml_value(w.psi, f'{label}.psi', table)}")
+        if w.restitution != 1:
+            lines.append(
+                f"restitution = {_toml_value(w.restitution, f'{label}.restitution', table)}"
+            )
+        if w.impulsive_matrix.rows:
+            nus = [
+                _toml_value(
+                    _row_expression(w.impulsive_matrix.row(A), v),
+                    f"{label}.impulsive_constraints[{A}]",
+                    table,
+                )
+                for A in range(w.impulsive_matrix.rows)
+            ]
+            lines.append("impulsive_constraints = [" + ", ".join(nus) + "]")
+        if w.law != "newton":
+            lines.append(f"law = {_toml_string(w.law)}")
+        if w.velocity is not None:
+            comps = [
+                _toml_value(c, f"{label}.velocity[{j}]", table) for j, c in enumerate(w.velocity)
+            ]
+            lines.append("velocity = [" + ", ".join(comps) + "]")
+    return "\n".join(lines) + "\n"
+
+
+def save_scene(
+    scene: Scene,
+    path: str | os.PathLike[str],
+    *,
+    defaults: Mapping[sp.Symbol | str, object] | None = None,
+    description: str = "",
+    functions: Mapping[str, sp.Expr] | None = None,
+) -> Path:
+    """Write :func:`dump_scene` of ``scene`` to ``path``; return the path."""
+    text = dump_scene(scene, defaults=defaults, description=description, functions=functions)
+    p = Path(path)
+    p.write_text(text, encoding="utf-8")
+    return p
