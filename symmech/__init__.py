@@ -23,7 +23,8 @@ from symmech.errors import (
     SymmechWarning,
     UndecidedWarning,
 )
-from symmech.geometry.lie import bracket_rank, hat, is_involutive, lie_bracket
+from symmech.geometry.distributions import bracket_rank, is_involutive
+from symmech.geometry.lie import hat, lie_bracket
 from symmech.scene import Scene
 from symmech.scenefile import (
     SceneFile,

@@ -18,7 +18,8 @@ import sympy as sp
 from symmech import references
 from symmech.declaration.symbols import coordinates as make_coordinates
 from symmech.errors import SceneError, SymmechError
-from symmech.geometry.lie import bracket_rank, hat, is_involutive, lie_bracket
+from symmech.geometry.distributions import bracket_rank, is_involutive
+from symmech.geometry.lie import hat, lie_bracket
 from symmech.scene import Scene
 from symmech.scenefile import builtin_scene_path, read_scene
 

@@ -17,7 +17,7 @@ import pytest
 import sympy as sp
 
 from symmech.cli import derivation
-from symmech.geometry.lie import bracket_rank, is_involutive
+from symmech.geometry.distributions import bracket_rank, is_involutive
 from symmech.scenefile import load_scene, reads_scene
 
 # ---------------------------------------------------------------------------------------

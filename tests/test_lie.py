@@ -16,15 +16,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from symmech.errors import SceneError
-from symmech.geometry.lie import (
+from symmech.geometry.distributions import (
     BracketRankResult,
     InvolutivityResult,
     bracket_rank,
-    commutation_coefficients,
-    hat,
     is_involutive,
-    lie_bracket,
 )
+from symmech.geometry.lie import commutation_coefficients, hat, lie_bracket
 
 x, y, z = sp.symbols("x y z", real=True)
 XYZ = (x, y, z)

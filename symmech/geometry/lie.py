@@ -1,4 +1,4 @@
-"""Lie brackets of vector fields, Frobenius involutivity, bracket rank, frame coefficients.
+"""Lie brackets of vector fields and the commutation coefficients of a frame.
 
 Conventions (slides 000):
 
@@ -9,67 +9,33 @@ Conventions (slides 000):
   a field is a matrix ``X(R)`` and ``[X, Y] = d_X Y - d_Y X`` with the directional
   derivative ``d_X Y = sum_ab X_ab dY/dR_ab``.  This is the coordinate formula applied to
   the entries of ``R`` as coordinates; fields are flattened row by row internally.
-* "Constrained mechanical system" (Frobenius integrability condition): a distribution
-  spanned by ``X_1 .. X_k`` is integrable (holonomic) iff it is closed under the bracket.
 * "Connection coefficients in a nonholonomic basis": a frame ``u_k`` (the columns of S)
   has commutation coefficients ``[u_k, u_l] = c^m_kl u_m``.
 
-Generic rank policy (:data:`GENERIC_RANK_POLICY`): ranks of fields with non-constant
-components are *generic* ranks, the rank at points off a measure-zero set.  Each rank is
-computed twice: symbolically (exact linear algebra on the entries, simplified first when
-``simplify=True``) and numerically (the largest rank, by a 40-digit SVD, over a few
-reproducible random rational sample points, see :mod:`symmech.declaration.sampling`).
-The numeric rank at a random point equals the generic rank with probability one, whereas
-the symbolic rank is too large when sympy fails to recognise a zero (e.g. an unsimplified
-``sin^2 + cos^2 - 1``).  So the numeric rank decides when it is available; disagreements
-are reported in the result's ``notes``.  When the entries cannot be evaluated to numbers
-(undefined functions), the symbolic rank is used alone and a note says so.  Matrix-valued
-fields are sampled at generic points of the ambient matrix space (not of the submanifold).
+Involutivity (Frobenius) and the bracket rank of a distribution are in
+:mod:`symmech.geometry.distributions`.
 """
 
 from __future__ import annotations
 
 import numbers
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, TypeAlias
 
-import mpmath
 import sympy as sp
-from sympy.polys.matrices import DomainMatrix
 
-from symmech.algebra.budget import BudgetExceeded
-from symmech.declaration.sampling import sample_points
 from symmech.errors import SceneError
 from symmech.geometry.field import common_domain
-from symmech.geometry.simplification import Level, check_level, normal_form, polish, tidy
+from symmech.geometry.rank import _generic_rank, _sample
+from symmech.geometry.simplification import Level, check_level, normal_form, polish
 
 __all__ = [
-    "GENERIC_RANK_POLICY",
-    "BracketRankResult",
-    "InvolutivityResult",
-    "bracket_rank",
+    "Field",
     "commutation_coefficients",
     "hat",
-    "is_involutive",
     "lie_bracket",
 ]
-
-GENERIC_RANK_POLICY = (
-    "generic rank: rank off a measure-zero set of points; symbolic rank (exact, after "
-    "simplification) cross-checked by the maximal 40-digit numeric rank at random rational "
-    "sample points, the numeric rank deciding when available"
-)
-
-#: Number of random sample points of the numeric rank check.
-_SAMPLES = 3
-#: Working precision (digits) and relative singular-value threshold of the numeric rank.
-_DPS = 40
-_REL_TOL = mpmath.mpf(10) ** -25
-#: An evaluated entry with fewer significant bits than this, or smaller in magnitude than
-#: ``_ZERO_ABS``, is an exact zero that evalf could not resolve (cancellation).
-_MIN_BITS = 20
-_ZERO_ABS = sp.Float(10, _DPS) ** -60
 
 Field: TypeAlias = sp.MatrixBase | Sequence[Any]
 Point = Mapping[sp.Symbol, Any]
@@ -329,347 +295,6 @@ def hat(w: Field) -> sp.Matrix:
         raise SceneError(f"hat: w must be a 3-vector (3x1 Matrix or 3 expressions), got {w!r}")
     a, b, c = (_component(v, f"w[{i}]", "hat") for i, v in enumerate(comps))
     return sp.Matrix([[0, -c, b], [c, 0, -a], [-b, a, 0]])
-
-
-# ---------------------------------------------------------------------------- generic rank
-
-
-@dataclass(frozen=True)
-class _Rank:
-    rank: int
-    symbolic: int
-    numeric: int | None  # None: entries could not be evaluated to numbers
-
-
-def _entry(e: sp.Expr, simplify: bool) -> sp.Expr:
-    """Entry prepared for the symbolic rank: cancelled if rational, else bounded simplify."""
-    if not simplify or e.is_Rational or e.is_polynomial():
-        return e  # polynomials: the exact domain arithmetic of the rank needs nothing more
-    if e.is_rational_function():
-        return sp.cancel(e)
-    return tidy(e, "full")
-
-
-def _symbolic_rank(M: sp.Matrix) -> int:
-    if all(e == 0 for e in M):
-        return 0
-    try:
-        return int(DomainMatrix.from_Matrix(M).to_field().rank())
-    except BudgetExceeded:  # a deadline of the stage around it
-        raise
-    except Exception:  # domain construction can fail on exotic expressions
-        return int(M.rank(simplify=True))
-
-
-def _numeric_value(e: sp.Expr, point: Point) -> mpmath.mpc | None:
-    exact = e.xreplace(dict(point))
-    if exact.is_Rational:  # polynomial / rational entries at rational points: no evalf
-        return mpmath.mpf(int(exact.p)) / int(exact.q)
-    if exact.free_symbols:
-        return None
-    v = exact.evalf(_DPS)
-    if not v.is_number or v.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
-        return None
-    try:
-        parts = [_mp_part(part) for part in v.as_real_imag()]
-    except (TypeError, ValueError):
-        return None
-    return parts[0] if parts[1] == 0 else mpmath.mpc(*parts)
-
-
-def _mp_part(x: sp.Expr) -> mpmath.mpf:
-    """A real part as an mpf; evalf's "no significant digit" results (``0.e-181``) are 0."""
-    if x == 0:
-        return mpmath.mpf(0)
-    f = sp.Float(x, _DPS)
-    if getattr(f, "_prec", _DPS) < _MIN_BITS or abs(f) < _ZERO_ABS:
-        return mpmath.mpf(0)
-    return mpmath.mpf(f)
-
-
-def _numeric_rank_at(M: sp.Matrix, point: Point) -> int | None:
-    rows, cols = M.shape
-    with mpmath.workdps(_DPS):
-        A = mpmath.matrix(rows, cols)
-        for i in range(rows):
-            for j in range(cols):
-                v = _numeric_value(M[i, j], point)
-                if v is None or not mpmath.isfinite(v):
-                    return None
-                A[i, j] = v
-        # Column scaling does not change the rank and evens out the singular values.
-        keep = []
-        for j in range(cols):
-            norm = mpmath.sqrt(sum(abs(A[i, j]) ** 2 for i in range(rows)))
-            if norm != 0:
-                keep.append(j)
-                for i in range(rows):
-                    A[i, j] /= norm
-        if not keep:
-            return 0
-        B = mpmath.matrix(rows, len(keep))
-        for i in range(rows):
-            for jj, j in enumerate(keep):
-                B[i, jj] = A[i, j]
-        s = mpmath.svd(B, compute_uv=False)
-        smax = max(abs(x) for x in s)
-        return sum(1 for x in s if abs(x) > _REL_TOL * smax)
-
-
-def _generic_rank(
-    columns: Sequence[sp.MatrixBase], points: Sequence[Point], simplify: bool
-) -> _Rank:
-    M = sp.Matrix.hstack(*columns)
-    symbolic = _symbolic_rank(M.applyfunc(lambda e: _entry(e, simplify)))
-    ranks = [r for r in (_numeric_rank_at(M, p) for p in points) if r is not None]
-    numeric = max(ranks) if ranks else None
-    return _Rank(symbolic if numeric is None else numeric, symbolic, numeric)
-
-
-def _sample(columns: Sequence[sp.MatrixBase], points: Sequence[Point] | None) -> list[Point]:
-    if points is not None:
-        return list(points)
-    syms: set[sp.Symbol] = set()
-    for col in columns:
-        syms |= col.free_symbols
-    return list(sample_points(syms, count=_SAMPLES))
-
-
-def _note(label: str, r: _Rank) -> list[str]:
-    if r.numeric is None:
-        return [f"{label}: could not evaluate numerically; symbolic rank {r.symbolic} used"]
-    if r.numeric != r.symbolic:
-        return [
-            f"{label}: symbolic rank {r.symbolic} disagrees with numeric rank {r.numeric} "
-            "at the sample points; the numeric rank is used"
-        ]
-    return []
-
-
-def _points_arg(points: Iterable[Point] | None, where: str) -> list[Point] | None:
-    if points is None:
-        return None
-    pts = list(points)
-    if not pts or not all(isinstance(p, Mapping) for p in pts):
-        raise SceneError(f"{where}: points must be a non-empty list of {{symbol: value}} mappings")
-    return pts
-
-
-# ---------------------------------------------------------------------------- Frobenius
-
-
-@dataclass(frozen=True)
-class InvolutivityResult:
-    """Outcome of the Frobenius test (slides 000, "Frobenius integrability condition").
-
-    Truthy iff the distribution is involutive.  When it is not, ``pair = (i, j)`` and
-    ``bracket = [X_i, X_j]`` (in the layout of the fields) certify it: the bracket is not in
-    the span of the fields at generic points.  ``rank`` is the generic rank of the span.
-    """
-
-    involutive: bool
-    rank: int
-    dimension: int
-    pair: tuple[int, int] | None = None
-    bracket: sp.ImmutableMatrix | None = None
-    notes: tuple[str, ...] = ()
-    policy: str = field(default=GENERIC_RANK_POLICY, repr=False)
-
-    def __bool__(self) -> bool:
-        return self.involutive
-
-    def _repr_latex_(self) -> str:
-        if self.involutive:
-            return f"$\\text{{involutive (rank {self.rank} of {self.dimension})}}$"
-        i, j = self.pair or (0, 0)
-        return (
-            f"$\\text{{not involutive: }} [X_{{{i}}}, X_{{{j}}}] = {sp.latex(self.bracket)}"
-            f" \\notin \\operatorname{{span}}\\{{X\\}}$"
-        )
-
-
-def is_involutive(
-    fields: Sequence[Field],
-    q: Any,
-    *,
-    simplify: bool = True,
-    points: Iterable[Point] | None = None,
-) -> InvolutivityResult:
-    """Whether ``span{X_1 .. X_k}`` is closed under the Lie bracket (Frobenius).
-
-    Slides 000, "Constrained mechanical system": the distribution is (locally) integrable,
-    i.e. a holonomic constraint, iff ``[X_i, X_j] in span{X_1 .. X_k}`` for all i < j.
-    Membership is tested as ``rank [X_1 .. X_k, [X_i, X_j]] == rank [X_1 .. X_k]`` with
-    generic ranks (:data:`GENERIC_RANK_POLICY`).  Matrix-valued fields are flattened.
-
-    Args:
-        fields: the vector fields (layout as in :func:`lie_bracket`).
-        q: the coordinates (sequence of symbols, or matrix of symbols).
-        simplify: simplify entries before the symbolic rank and simplify the certificate.
-        points: sample points ``{symbol: value}`` for the numeric check (default: three
-            reproducible random rational points over all free symbols).  Pass points on a
-            submanifold (e.g. rotations) to test there.
-
-    Returns:
-        An :class:`InvolutivityResult` (truthy iff involutive).
-    """
-    where = "is_involutive"
-    cs = _coords(q, where)
-    Xs = _fields(fields, cs, where)
-    pts = _points_arg(points, where)
-    level: Level = "light" if simplify else "none"
-    sample = _sample(Xs, pts)
-    base = _generic_rank(Xs, sample, simplify)
-    notes = _note("rank of the fields", base)
-    for i in range(len(Xs)):
-        for j in range(i + 1, len(Xs)):
-            Z = _bracket(Xs[i], Xs[j], cs.symbols, level)
-            if all(e == 0 for e in Z):
-                continue
-            ext = _generic_rank([*Xs, Z], _sample([*Xs, Z], pts), simplify)
-            notes += _note(f"rank with [X_{i}, X_{j}]", ext)
-            if ext.rank > base.rank:
-                return InvolutivityResult(
-                    involutive=False,
-                    rank=base.rank,
-                    dimension=cs.n,
-                    pair=(i, j),
-                    bracket=sp.ImmutableMatrix(_shaped(Z, cs)),
-                    notes=tuple(notes),
-                )
-    return InvolutivityResult(True, base.rank, cs.n, notes=tuple(notes))
-
-
-# ---------------------------------------------------------------------------- bracket rank
-
-
-@dataclass(frozen=True)
-class BracketRankResult:
-    """Generic rank of the fields and their iterated brackets up to a depth.
-
-    ``fields`` lists the fields kept (in the layout of the input), ``words`` their brackets:
-    the word ``(i,)`` is ``X_i``, ``(i, j)`` is ``[X_i, X_j]``, ``(i, j, k)`` is
-    ``[X_i, [X_j, X_k]]`` (left-normed brackets span all iterated brackets).  A bracket is
-    kept iff it raises the generic rank, so ``rank == len(fields)``.  ``dimension`` is the
-    number of coordinates (matrix entries), ``manifold_dimension`` the ``dim`` compared with
-    ``rank`` for ``bracket_generating``.
-    """
-
-    rank: int
-    fields: tuple[sp.ImmutableMatrix, ...]
-    words: tuple[tuple[int, ...], ...]
-    depth: int
-    dimension: int
-    manifold_dimension: int
-    bracket_generating: bool
-    notes: tuple[str, ...] = ()
-    policy: str = field(default=GENERIC_RANK_POLICY, repr=False)
-
-    def _repr_latex_(self) -> str:
-        words = ", ".join(_latex_word(w) for w in self.words)
-        verdict = "bracket-generating" if self.bracket_generating else "not bracket-generating"
-        return (
-            f"$\\text{{rank {self.rank} of {self.manifold_dimension} at depth {self.depth}"
-            f" ({verdict}): }} {words}$"
-        )
-
-
-def _latex_word(word: tuple[int, ...]) -> str:
-    """``(i,) -> X_i``, ``(i, j, k) -> [X_i, [X_j, X_k]]`` (left-normed)."""
-    out = f"X_{{{word[-1]}}}"
-    for i in reversed(word[:-1]):
-        out = f"[X_{{{i}}}, {out}]"
-    return out
-
-
-def bracket_rank(
-    fields: Sequence[Field],
-    q: Any,
-    depth: int = 3,
-    *,
-    dim: int | None = None,
-    simplify: bool = True,
-    points: Iterable[Point] | None = None,
-) -> BracketRankResult:
-    """Generic rank of ``X_1 .. X_k`` and their iterated Lie brackets of length <= depth.
-
-    The distribution is bracket-generating (Chow-Rashevskii: every nearby configuration is
-    reachable, the non-holonomic situation of the slides 000 "car" and "rolling ball") when
-    this rank equals the manifold dimension.  Brackets are built left-normed:
-    level 1 is the fields, level d+1 is ``[X_i, W]`` for the fields ``X_i`` and the kept
-    brackets ``W`` of level d.  A bracket that does not raise the generic rank is dropped;
-    this loses nothing, since ``W = sum f_a W_a`` gives
-    ``[X, W] = sum X(f_a) W_a + f_a [X, W_a]``.  Stops early once the rank reaches ``dim``.
-
-    Args:
-        fields: the vector fields (layout as in :func:`lie_bracket`).
-        q: the coordinates.
-        depth: maximal bracket length (1: the fields only).
-        dim: manifold dimension (default: number of coordinates; for ``SO(3)`` in 3 x 3
-            matrices pass ``dim=3``).
-        simplify, points: as in :func:`is_involutive`.
-    """
-    where = "bracket_rank"
-    cs = _coords(q, where)
-    Xs = _fields(fields, cs, where)
-    pts = _points_arg(points, where)
-    if isinstance(depth, bool) or not isinstance(depth, int) or depth < 1:
-        raise SceneError(f"{where}: depth must be an integer >= 1, got {depth!r}")
-    if dim is None:
-        dim = cs.n
-    elif isinstance(dim, bool) or not isinstance(dim, int) or not 1 <= dim <= cs.n:
-        raise SceneError(f"{where}: dim must be an integer in 1..{cs.n}, got {dim!r}")
-    level: Level = "light" if simplify else "none"
-
-    kept: list[sp.ImmutableMatrix] = []
-    words: list[tuple[int, ...]] = []
-    notes: list[str] = []
-    rank = 0
-
-    def offer(Z: sp.ImmutableMatrix, word: tuple[int, ...]) -> bool:
-        nonlocal rank
-        if all(e == 0 for e in Z):
-            return False
-        r = _generic_rank([*kept, Z], _sample([*kept, Z], pts), simplify)
-        notes.extend(_note(f"rank with word {word}", r))
-        if r.rank > rank:
-            rank = r.rank
-            kept.append(Z)
-            words.append(word)
-            return True
-        return False
-
-    frontier: list[tuple[sp.ImmutableMatrix, tuple[int, ...]]] = []
-    for i, X in enumerate(Xs):
-        if offer(X, (i,)):
-            frontier.append((X, (i,)))
-    for _ in range(2, depth + 1):
-        if rank >= dim:
-            break
-        nxt = []
-        for W, word in frontier:
-            for i, X in enumerate(Xs):
-                if word == (i,):
-                    continue  # [X_i, X_i] = 0
-                Z = _bracket(X, W, cs.symbols, level)
-                if offer(Z, (i, *word)):
-                    nxt.append((Z, (i, *word)))
-                if rank >= dim:
-                    break
-            if rank >= dim:
-                break
-        frontier = nxt
-
-    return BracketRankResult(
-        rank=rank,
-        fields=tuple(sp.ImmutableMatrix(_shaped(Z, cs)) for Z in kept),
-        words=tuple(words),
-        depth=depth,
-        dimension=cs.n,
-        manifold_dimension=dim,
-        bracket_generating=rank >= dim,
-        notes=tuple(notes),
-    )
 
 
 # -------------------------------------------------------------------------------- frames
