@@ -39,21 +39,26 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
+from symmech.codegen.blocks import (
+    BATCH_SUFFIX,
+    Block,
+    CodegenError,
+    wall_function_name,
+    wall_ids,
+)
 from symmech.codegen.closed_form_budget import closed_form_cost
-from symmech.codegen.printers import identifier
+from symmech.codegen.kinds import SCENE_BUILDERS, WALL_BUILDERS, BuildContext
 from symmech.declaration.symbols import t as TIME
-from symmech.errors import SymmechError
 from symmech.impacts.stability import stable_coefficient
 
 if TYPE_CHECKING:
-    from symmech.impacts import ImpactMap
     from symmech.scene import Scene
 
 __all__ = [
@@ -92,29 +97,6 @@ FUNCTIONS = (
     "projectors",
     "jacobian",
 )
-
-#: Name prefixes of the per-wall functions, by kind: prefix-free (module docstring).
-WALL_PREFIXES = {"psi": "psi_", "dpsi": "dpsi_", "psi_t": "psit_", "impact": "impact_"}
-
-#: Suffix of the C batch function of each generated function.
-BATCH_SUFFIX = "_batch"
-
-
-class CodegenError(SymmechError, ValueError):
-    """Code cannot be generated as asked (bad option, unsupported expression, ...)."""
-
-
-@dataclass(frozen=True)
-class Block:
-    """A named array of expressions: ``shape`` (), (k,) or (r, c); ``entries`` row-major."""
-
-    name: str
-    shape: tuple[int, ...]
-    entries: tuple[sp.Expr, ...]
-
-    @property
-    def size(self) -> int:
-        return len(self.entries)
 
 
 @dataclass(frozen=True)
@@ -188,36 +170,6 @@ class ScenePlan:
 # ---------------------------------------------------------------------------------------
 
 
-def _matrix_block(name: str, M: sp.MatrixBase) -> Block:
-    """A matrix block, always two-dimensional (a 1 x 1 metric stays (1, 1))."""
-    M = sp.Matrix(M)
-    return Block(name, (M.rows, M.cols), tuple(M))
-
-
-def _vector_block(name: str, x: sp.MatrixBase | Sequence[sp.Expr]) -> Block:
-    """A vector block of shape (k,), from a column, a row or a sequence."""
-    entries = tuple(x)
-    return Block(name, (len(entries),), entries)
-
-
-def wall_ids(names: Sequence[str]) -> tuple[str, ...]:
-    """Sanitised, unique identifiers for wall names (module docstring), by index."""
-    taken: set[str] = set()
-    out = []
-    for name in names:
-        wid = identifier(name, "", taken, part=True)
-        if wid == BATCH_SUFFIX[1:] or wid.endswith(BATCH_SUFFIX):
-            taken.discard(wid)
-            wid = identifier(wid + "_w", "", taken, part=True)
-        out.append(wid)
-    return tuple(out)
-
-
-def wall_function_name(kind: str, wall_id: str) -> str:
-    """The generated name of the ``kind`` function (psi, dpsi, psi_t, impact) of a wall."""
-    return WALL_PREFIXES[kind] + wall_id
-
-
 def check_unique_names(functions: Sequence[FunctionPlan]) -> None:
     """Raise :class:`CodegenError` unless every generated name is unique.
 
@@ -234,10 +186,6 @@ def check_unique_names(functions: Sequence[FunctionPlan]) -> None:
                 seen[name] = what
     if clashes:
         raise CodegenError("generated function names collide: " + "; ".join(clashes))
-
-
-def _scalar_block(name: str, e: sp.Expr) -> Block:
-    return Block(name, (), (sp.sympify(e),))
 
 
 class _Inputs:
@@ -478,259 +426,22 @@ def _build(
             )
         )
 
-    M = sp.Matrix(scene.mass_matrix())
-    f = sp.Matrix(scene.forcing())
-    # a structurally diagonal metric is not factored: the solves divide by its diagonal
-    diag = int(all(M[i, j] == 0 for i in range(n) for j in range(n) if i != j))
-    mu = sp.Matrix(scene.constraint_matrix)
-    closed = strategy == "closed_form"
-    M_block = _matrix_block("M", M)  # one block for every solve (n^2 entries, built once)
-
-    def constrained_blocks() -> list[Block]:
-        """g, f, the constraint one-forms and mu_dot v: the constrained system's inputs."""
-        return [
-            M_block,
-            _vector_block("f", f),
-            _matrix_block("mu", mu),
-            _vector_block("rate", scene.constraint_rate()),
-        ]
-
-    if "mass_matrix" in wanted:
-        add(
-            "mass_matrix",
-            "mass_matrix",
-            "kinetic metric g(q) in the velocity basis",
-            "T = 1/2 v^T g v",
-            ("q",),
-            [_matrix_block("out", M)],
-            (n, n),
-        )
-    if "forcing" in wanted:
-        add(
-            "forcing",
-            "forcing",
-            "forcing f(q, v, t) of the unconstrained equations g v_dot = f",
-            "f_k = -Gamma_kij v^i v^j - dV/dq^k (first kind, no inverse)",
-            ("q", "v"),
-            [_vector_block("out", f)],
-            (n,),
-        )
-    need_acc = bool({"acceleration", "rhs"} & wanted)
-    if "forcing" in wanted or need_acc:
-        omitted.extend(_forcing_notes(f, v, scene.frame is not None))
-    if need_acc:
-        if closed:
-            acc = sp.Matrix(scene.acceleration())
-            add(
-                "acceleration",
-                "acceleration",
-                "acceleration v_dot (closed form)",
-                "g v_dot = f + mu^T lambda, mu v = 0 (Carnot paper eq. 5)",
-                ("q", "v"),
-                [_vector_block("out", acc)],
-                (n,),
-            )
-        elif m:
-            add(
-                "acceleration",
-                "acceleration",
-                "acceleration v_dot, constrained system solved in the code",
-                "g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v (Carnot paper eq. 5)",
-                ("q", "v"),
-                constrained_blocks(),
-                (n,),
-                step="constrained_acceleration",
-                step_args=(n, m, diag),
-            )
-        else:
-            add(
-                "acceleration",
-                "acceleration",
-                "acceleration v_dot, g v_dot = f solved in the code (Cholesky)",
-                "g v_dot = f (Carnot paper eq. 2)",
-                ("q", "v"),
-                [M_block, _vector_block("f", f)],
-                (n,),
-                step="spd_solve",
-                step_args=(n, diag),
-            )
-    if "rhs" in wanted:
-        qdot = sp.Matrix(scene.kinematics())
-        add(
-            "rhs",
-            "rhs",
-            "first-order system y = (q, v): y_dot = (q_dot, v_dot)",
-            "q_dot = S(q) v, v_dot = acceleration(q, v)",
-            ("y",),
-            [_vector_block("out", qdot)],
-            (2 * n,),
-            calls="acceleration",
-        )
-    if "jacobian" in wanted:
-        jac = _jacobian(scene)
-        if isinstance(jac, str):
-            omitted.append(jac)
-        else:
-            add(
-                "jacobian",
-                "jacobian",
-                "Jacobian d(y_dot)/dy of the first-order system y = (q, v) (closed form)",
-                "J = d(S(q) v, v_dot(q, v))/d(q, v), v_dot the closed-form acceleration",
-                ("y",),
-                [_matrix_block("out", jac)],
-                (2 * n, 2 * n),
-            )
-    if "acceleration" not in wanted and need_acc:
-        # rhs needs it: keep it, but say so
-        omitted.append("acceleration was not asked for but is emitted: rhs calls it")
-    if "energy" in wanted:
-        add(
-            "energy",
-            "energy",
-            "total energy T + V",
-            "E = 1/2 v^T g v + V(q, t)",
-            ("q", "v"),
-            [_scalar_block("out", _energy(M, v, scene.potential))],
-            (),
-        )
-    if m:
-        if "multipliers" in wanted:
-            if closed:
-                add(
-                    "multipliers",
-                    "multipliers",
-                    "Lagrange multipliers lambda (closed form)",
-                    "lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)",
-                    ("q", "v"),
-                    [_vector_block("out", scene.multipliers())],
-                    (m,),
-                )
-            else:
-                add(
-                    "multipliers",
-                    "multipliers",
-                    "Lagrange multipliers lambda, solved in the code",
-                    "lambda = C^-1 (-mu_dot v - mu g^-1 f), C = mu g^-1 mu^T (Carnot 2.2)",
-                    ("q", "v"),
-                    constrained_blocks(),
-                    (m,),
-                    step="constrained_multipliers",
-                    step_args=(n, m, diag),
-                )
-        if "constraint_residual" in wanted:
-            add(
-                "constraint_residual",
-                "constraint_residual",
-                "constraint residual mu(q) v (zero on the constraint distribution D)",
-                "r_a = mu^a_i(q) v^i",
-                ("q", "v"),
-                [_vector_block("out", mu * sp.Matrix(v))],
-                (m,),
-            )
-        if "projectors" in wanted:
-            P, Q = scene.projectors()
-            for label, mat, what in (("P", P, "onto D"), ("Q", Q, "onto D^perp")):
-                add(
-                    f"projector_{label}",
-                    "projectors",
-                    f"g-orthogonal projector {label} {what}",
-                    "Q = Z C^-1 mu, P = I - Q (Carnot paper section 2.2)",
-                    ("q",),
-                    [_matrix_block("out", mat)],
-                    (n, n),
-                )
-    else:
-        omitted.append("multipliers, constraint residual, projectors: the scene has no constraints")
-
-    S = scene.frame
+    ctx = BuildContext(
+        scene=scene,
+        wanted=wanted,
+        closed=strategy == "closed_form",
+        omitted=omitted,
+        add=add,
+    )
+    for builder in SCENE_BUILDERS:
+        builder(ctx)
     ids = wall_ids([w.name for w in scene.walls])
     for w, wid in zip(scene.walls, ids, strict=True):
-        label = f"wall {w.name!r}"
-        grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in q]])
-        psi_t = sp.diff(w.psi, TIME)
-        where: dict[str, Any] = {"wall": w.name, "wall_index": w.index}
-        if "psi" in wanted:
-            add(
-                wall_function_name("psi", wid),
-                "psi",
-                f"gap of {label}; the admissible side is psi >= 0",
-                f"psi = {w.psi}",
-                ("q",),
-                [_scalar_block("out", w.psi)],
-                (),
-                **where,
-            )
-        if "dpsi" in wanted:
-            add(
-                wall_function_name("dpsi", wid),
-                "dpsi",
-                f"gradient d psi/d q of {label} (coordinates)",
-                "dpsi_i = d psi / d q^i",
-                ("q",),
-                [_vector_block("out", grad)],
-                (n,),
-                **where,
-            )
-        if "psi_t" in wanted:
-            if psi_t != 0:
-                add(
-                    wall_function_name("psi_t", wid),
-                    "psi_t",
-                    f"time derivative d psi/d t of the moving {label}",
-                    "psi_t = d psi / d t; d/dt psi(t, q(t)) = psi_t + dpsi(q_dot)",
-                    ("q",),
-                    [_scalar_block("out", psi_t)],
-                    (),
-                    **where,
-                )
-            else:
-                omitted.append(
-                    f"{wall_function_name('psi_t', wid)}: {label} does not move (d psi/d t = 0)"
-                )
-        if "impact" in wanted:
-            name = wall_function_name("impact", wid)
-            if closed or w.law == "energy":
-                imp = _energy_law_map(scene, w) if not closed else scene.impact_map(w.index)
-                if not closed:
-                    omitted.append(
-                        f"{name}: the energy law (text 001, 3.2) is not linear;"
-                        " its closed form is emitted even with strategy linear_solve"
-                    )
-                add(
-                    name,
-                    "impact",
-                    f"post-impact velocity at {label} ({w.law} law, closed form)",
-                    _impact_equation(imp),
-                    ("q", "v"),
-                    [_vector_block("out", imp.post_velocity)],
-                    (n,),
-                    **where,
-                )
-            else:
-                dpsi_v = grad * S if S is not None else grad
-                A = mu.col_join(dpsi_v).col_join(sp.Matrix(w.impulsive_matrix))
-                k = A.rows
-                add(
-                    name,
-                    "impact",
-                    f"post-impact velocity at {label} (Newton law, KKT solved in the code)",
-                    "g (v+ - v-) = A^T lambda, A = [mu; dpsi; nu]; mu v+ = 0,"
-                    " dpsi v+ + psi_t = -alpha (dpsi v- + psi_t), nu (v+ - V) = 0"
-                    " (Carnot paper eqs. 6, 15, 20)",
-                    ("q", "v"),
-                    [
-                        M_block,
-                        _matrix_block("A", A),
-                        _impact_scalars(w, psi_t, S),
-                    ],
-                    (n,),
-                    step="impact_kkt",
-                    step_args=(n, k, m, diag),
-                    **where,
-                )
+        for wall_builder in WALL_BUILDERS:
+            wall_builder(ctx, w, wid)
     if not scene.walls:
         omitted.append("psi, dpsi, impact maps: the scene has no walls")
-    if closed:
+    if ctx.closed:
         omitted.append("linear-algebra routines: strategy closed_form evaluates closed forms")
     if sp.sympify(scene.potential) == 0:
         omitted.append("potential terms: V = 0")
@@ -759,104 +470,3 @@ def _build(
         omitted=tuple(omitted),
         fallback=fallback,
     )
-
-
-def _energy(M: sp.Matrix, v: Sequence[sp.Symbol], V: sp.Expr) -> sp.Expr:
-    """``E = 1/2 v^T g v + V`` as ``sum_i g_ii v_i^2 / 2 + sum_{i<j} g_ij v_i v_j + V``,
-    over the non-zero entries and without expanding them (the printed code evaluates
-    each entry once; :meth:`Scene.energy` expands, which costs seconds at n = 32)."""
-    n = len(v)
-    terms = [M[i, i] * v[i] ** 2 / 2 for i in range(n) if M[i, i] != 0]
-    terms += [M[i, j] * v[i] * v[j] for i in range(n) for j in range(i + 1, n) if M[i, j] != 0]
-    return sp.Add(*terms, V)
-
-
-def _energy_law_map(scene: Scene, wall) -> ImpactMap:
-    """The closed-form impact map of an energy-law wall under ``linear_solve`` (there is
-    no linear system to solve for it), within :data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`;
-    over budget a :class:`CodegenError` names the wall and the budget."""
-    stage = f"closed-form energy-law impact map of wall {wall.name!r}"
-    try:
-        with limits.time_limit(stage, limits.CLOSED_FORM_SECONDS):
-            return scene.impact_map(wall.index)
-    except BudgetExceeded as exc:
-        raise CodegenError(f"{exc}; the energy law has no linear_solve form") from None
-
-
-def _jacobian(scene: Scene) -> sp.Matrix | str:
-    """``d(S(q) v, v_dot)/d(q, v)`` from the closed-form acceleration (Carnot paper eq. 5),
-    derived within :data:`symmech.algebra.budget.CLOSED_FORM_SECONDS`; over budget, the note that
-    says why it is left out."""
-    stage = f"Jacobian of scene {scene.name!r}"
-    try:
-        with limits.time_limit(stage, limits.CLOSED_FORM_SECONDS):
-            ydot = sp.Matrix(scene.kinematics()).col_join(sp.Matrix(scene.acceleration()))
-            return ydot.jacobian(list(scene.coordinates) + list(scene.velocities))
-    except BudgetExceeded as exc:
-        return f"jacobian: {exc}; not emitted (implicit methods then need another Jacobian)"
-
-
-def _forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[str]:
-    """What the forcing does not compute: the identically zero coefficients of its
-    velocity-quadratic part (Gamma_kij, or the connection coefficients omega_kij in a
-    frame, symmetrised in i, j: only the symmetric part enters f) and its zero entries."""
-    n = len(v)
-    index = {s: i for i, s in enumerate(v)}
-    total = n * n * (n + 1) // 2
-    present: set[tuple[int, int, int]] = set()
-
-    def monomials(k: int, e: sp.Expr, expanded: bool = False) -> None:
-        for term in sp.Add.make_args(e):
-            idx: list[int] = []
-            plain = True
-            for factor in sp.Mul.make_args(term):
-                base, power = factor.as_base_exp()
-                if base in index and power.is_Integer and power > 0:
-                    idx += [index[base]] * int(power)
-                elif factor.free_symbols & index.keys():
-                    plain = False
-            if not plain and not expanded and sp.count_ops(term) <= limits.NOTE_EXPAND_OPS:
-                monomials(k, sp.expand(term), True)
-            elif not plain:
-                # too large to expand for a note: count every pair of its velocities as
-                # present (the note then gives a lower bound of the zeros)
-                inside = sorted(index[s] for s in term.free_symbols & index.keys())
-                present.update((k, a, b) for a in inside for b in inside if a <= b)
-                bounded.append(k)
-            elif len(idx) == 2:
-                present.add((k, min(idx), max(idx)))
-
-    bounded: list[int] = []
-    for k, e in enumerate(f):
-        monomials(k, e)
-    nonzero = len(present)
-    what = "connection coefficients omega_k(ij)" if frame else "Christoffel symbols Gamma_k(ij)"
-    notes = [
-        f"forcing: {'at least ' if bounded else ''}{total - nonzero} of the {total} {what}"
-        " (symmetrised in i, j) are identically zero and are never computed"
-    ]
-    zeros = [k for k, e in enumerate(f) if e == 0]
-    if zeros:
-        notes.append(
-            f"forcing: entries {zeros} are identically zero (no velocity or potential term);"
-            " they are stored as 0.0 without computation"
-        )
-    return notes
-
-
-def _impact_scalars(w, psi_t: sp.Expr, S: sp.Matrix | None) -> Block:
-    """The scalars of the KKT impact: alpha, psi_t, and with a declared wall velocity W
-    the values ``nu W`` the impulsive constraints hold v+ to (Carnot paper eq. 20; the
-    default W gives them from the Gram matrix in the generated code)."""
-    values = [sp.sympify(w.restitution), psi_t]
-    if w.velocity is not None and w.impulsive_matrix.rows:
-        values += list(sp.Matrix(w.impulsive_matrix) * sp.Matrix(w.velocity))
-    return Block("s", (len(values),), tuple(values))
-
-
-def _impact_equation(imp) -> str:
-    if imp.law == "energy":
-        return "v+ = W + PP (v- - W) + alpha sqrt(...) N (text 001, section 3.2)"
-    if imp.moving:
-        return "v+ = (PP - alpha T~) (v- - W) + W (Carnot paper eq. 17, Prop. 4.2)"
-    return "v+ = (PP - alpha T~) v- (Carnot paper eq. 10, Prop. 3.4)"
