@@ -419,11 +419,16 @@ GOLDEN_SCENES = {
 @pytest.mark.parametrize("target", ["c", "numpy"])
 @pytest.mark.parametrize("name", sorted(GOLDEN_SCENES))
 def test_golden_files(request, capsys, name, target):
-    """The generated files equal tests/golden/<scene>/; update with --update-golden."""
+    """The generated files equal tests/golden/<scene>/, the CPython extension of a C target
+    (``<stem>_python.c``) included; update with --update-golden."""
     code = codegen.generate(GOLDEN_SCENES[name](), target)
     folder = GOLDEN / name
     update = request.config.getoption("--update-golden")
-    for filename, text in code.files.items():
+    outputs = dict(code.files)
+    if code.extension:
+        outputs[f"{code.stem}_python.c"] = code.extension
+    assert (target == "c") == bool(code.extension)
+    for filename, text in outputs.items():
         path = folder / filename
         old = path.read_text(encoding="utf-8") if path.is_file() else ""
         if update:

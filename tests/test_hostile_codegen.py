@@ -35,7 +35,8 @@ from symmech.codegen.escape import (
     python_comment,
     python_docstring,
 )
-from symmech.codegen.module import EXTENSION_TEMPLATE, extension_source
+from symmech.codegen.generate import EXTENSION_TEMPLATE
+from symmech.codegen.module import extension_source
 
 STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 

@@ -32,6 +32,9 @@ if TYPE_CHECKING:
     from symmech.codegen.module import SceneModule
     from symmech.scene import Scene
 
+#: The template of the CPython extension of a C target (see :attr:`GeneratedCode.extension`).
+EXTENSION_TEMPLATE = "c/python_module.c.jinja"
+
 __all__ = ["GeneratedCode", "generate"]
 
 
@@ -50,6 +53,10 @@ class GeneratedCode:
     (also written in the file header); ``functions`` are the lowered functions with their
     operation counts.  :meth:`write` saves the files, :meth:`load` compiles (C) or imports
     (NumPy) them and returns a :class:`~symmech.codegen.module.SceneModule`.
+    ``extension`` (C only) is the source of the CPython extension that the loader compiles
+    next to the library for one-state calls (template ``c/python_module.c.jinja``; its
+    module name is the macro ``SYMMECH_EXT_MODULE``); it is not part of the library and
+    :meth:`write` does not write it.
     """
 
     scene_name: str
@@ -62,6 +69,7 @@ class GeneratedCode:
     #: What each run-time parameter must satisfy (checked once per call, see
     #: :mod:`symmech.codegen.runtime_checks`), by index.
     parameter_rules: tuple[ParameterRule, ...] = field(default=())
+    extension: str = ""
 
     def write(self, folder: str | Path) -> list[Path]:
         """Write every file into ``folder`` (created if needed); returns the paths.
@@ -203,6 +211,26 @@ def generate(
         )
         for template, filename in backend.templates_to_render(stem)
     }
+    extension = ""
+    if target == "c" and any(f.one_state_fast for f in lowered):
+        extension = env.get_template(EXTENSION_TEMPLATE).render(
+            stamp=_stamp(__version__, templates_used(EXTENSION_TEMPLATE)),
+            scene=scene.name,
+            source=f"{stem}.c",
+            n_parameters=len(plan.parameters),
+            header=f"{stem}.h",
+            prefix=f"{stem}_",
+            functions=[
+                {
+                    "name": f.name,
+                    "sizes": [2 * plan.n if s == "y" else plan.n for s in f.state],
+                    "parameters": len(plan.parameters) if f.takes_parameters else 0,
+                    "dims": list(f.out_shape),
+                }
+                for f in lowered
+                if f.one_state_fast
+            ],
+        )
     return GeneratedCode(
         scene_name=scene.name,
         target=target,
@@ -212,6 +240,7 @@ def generate(
         functions=lowered,
         omitted=omitted,
         parameter_rules=rules,
+        extension=extension,
     )
 
 
