@@ -22,8 +22,8 @@ import sympy as sp
 import symmech as sm
 from symmech.algebra import budget
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.laplace import adjugate_det
 from symmech.examples import car, pendulum_on_cart
-from symmech.geometry.adjugate import adjugate_det
 from symmech.geometry.field import RationalField, field_solve
 from symmech.geometry.simplification import normal_form
 

@@ -1,5 +1,5 @@
-"""Cost-bounded derivation (the adjugate route, symmech.impacts.adjugate) and cost-bounded
-Carnot verification (exact evaluation, symmech.impacts.identity).
+"""Cost-bounded derivation (the adjugate route, symmech.impacts.adjugate_projectors) and
+cost-bounded Carnot verification (exact evaluation, symmech.impacts.identity).
 
 Two systems from the audit of issue 3 that used to hang: a 3-DOF wall with four
 trigonometric terms and an impulsive constraint (> 150 s to derive: the Gram inverse in
@@ -180,7 +180,7 @@ def test_adjugate_route_agrees_with_an_independent_inverse():
         point = dict(zip((x, y, z), values, strict=True))
         for name, value in independent_objects(scene, point).items():
             assert sp.Matrix(getattr(proj, name)).xreplace(point) == value, name
-    # the facts of the module docstring of symmech.impacts.projectors
+    # the facts of the module docstring of symmech.impacts.impact_projectors
     assert (proj.beta * proj.PY - proj.C).applyfunc(sp.cancel).is_zero_matrix
     assert sp.cancel((proj.dpsi * proj.N)[0, 0]) == 1
     assert (proj.C * proj.K - sp.eye(2)).applyfunc(sp.cancel).is_zero_matrix

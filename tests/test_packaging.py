@@ -173,3 +173,14 @@ def test_ci_runs_the_readme_test_command_verbatim():
     assert len(block) == 2, block  # exactly two commands
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").strip().splitlines()
     assert ci[-1] == block[1]
+
+
+def test_no_two_modules_share_a_file_name():
+    """Each module name says what it holds, once: no two modules of the package (packages'
+    __init__ aside) share a file name."""
+    names: dict[str, list[str]] = {}
+    for path in PKG.rglob("*.py"):
+        if path.name != "__init__.py":
+            names.setdefault(path.name, []).append(str(path.relative_to(PKG)))
+    shared = {name: paths for name, paths in names.items() if len(paths) > 1}
+    assert not shared, f"modules sharing a file name: {shared}"

@@ -23,6 +23,11 @@ from sympy.core.function import AppliedUndef
 
 from symmech.declaration.admissible import NON_SMOOTH, expression_problems
 from symmech.declaration.definiteness import Verdict, definiteness
+from symmech.declaration.kinetic_metric import (
+    NotQuadraticError,
+    linear_form_row,
+    metric_from_kinetic_energy,
+)
 from symmech.declaration.numeric import (
     EvaluationError,
     classify_symmetric,
@@ -31,11 +36,6 @@ from symmech.declaration.numeric import (
     rank_at,
     real_values,
     vanishes,
-)
-from symmech.declaration.quadratic import (
-    NotQuadraticError,
-    linear_form_row,
-    metric_from_kinetic_energy,
 )
 from symmech.declaration.sampling import atom_key, sample_points
 from symmech.declaration.symbols import t as TIME

@@ -35,7 +35,7 @@ Solving ``A X = B`` (:func:`field_solve`), strategy by cost:
   a 1 x 1 block is divided directly;
 * a block of size ``2 <= k <= FIELD_BLOCK_MAX_N`` is solved fraction-free: its rows (with the
   matching rows of B) are cleared of denominators, ``adj`` and ``det`` are formed once by
-  the division-free Laplace expansion of :mod:`symmech.geometry.adjugate` with the
+  the division-free Laplace expansion of :mod:`symmech.algebra.laplace` with the
   Pythagorean reduction applied to every minor, and ``X = (adj B) / det``; each entry is
   cancelled against the shared determinant (:func:`_quotient`).  A fraction-field LU
   would cancel a gcd at every elimination step, and on trigonometric entries, whose
@@ -59,7 +59,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
-from symmech.geometry.adjugate import adjugate_det
+from symmech.algebra.laplace import adjugate_det
 
 __all__ = [
     "RationalField",

@@ -7,7 +7,7 @@
 * :func:`kkt_post_velocity`: the independent impulse-momentum (KKT) route, for
   cross-checks.
 * :mod:`symmech.impacts.stability`: the stabilising step for float64 evaluation.
-* :mod:`symmech.impacts.adjugate`: the cost-bounded exact route for the projectors
+* :mod:`symmech.impacts.adjugate_projectors`: the cost-bounded exact route for the projectors
   (adjugates over the polynomial ring, one shared denominator, bounded final gcds).
 * :mod:`symmech.impacts.identity`: exact evaluation at a random point with a degree bound
   (Schwartz-Zippel), how :meth:`ImpactMap.carnot` decides large maps.
@@ -17,8 +17,8 @@ from symmech.impacts.carnot import CarnotResult
 from symmech.impacts.degeneracy import Singularity
 from symmech.impacts.energy_law import EnergyLaw
 from symmech.impacts.impact_map import LAWS, ImpactMap, derive_impact_map
+from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
 from symmech.impacts.kkt import kkt_post_velocity
-from symmech.impacts.projectors import ImpactProjectors, impact_projectors
 from symmech.impacts.stability import stable_coefficient, stable_linear, stable_matrix
 
 __all__ = [

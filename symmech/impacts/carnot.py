@@ -37,7 +37,7 @@ Deciding "the residual is identically zero", by cost (:attr:`CarnotResult.route`
 
 * ``"fraction field"``: when the map is small (at most
   :data:`symmech.algebra.budget.CARNOT_FIELD_OPS` operations in the matrices involved), the
-  residual is formed in the fraction field of the entries (:mod:`symmech.impacts.quadratic`),
+  residual is formed in the fraction field of the entries (:mod:`symmech.impacts.energy_forms`),
   each velocity coefficient cancelled (small ones also simplified, for trigonometric
   relations): a proof;
 * ``"exact evaluation"``: otherwise the residual, multiplied by ``1 + alpha``, is
@@ -61,9 +61,9 @@ import sympy as sp
 
 from symmech.algebra import budget as limits
 from symmech.declaration.latex import latex_text
+from symmech.impacts.energy_forms import Affine, QuadraticForm, common_domain
 from symmech.impacts.identity import Unsupported, identically_zero
-from symmech.impacts.projectors import ImpactProjectors
-from symmech.impacts.quadratic import Affine, QuadraticForm, common_domain
+from symmech.impacts.impact_projectors import ImpactProjectors
 
 __all__ = ["CarnotResult", "carnot_residual"]
 

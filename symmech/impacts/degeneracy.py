@@ -37,10 +37,10 @@ from sympy.matrices.utilities import dotprodsimp
 from symmech.algebra import budget as limits
 from symmech.declaration.wallpoints import points_on_wall
 from symmech.errors import ImpactError
-from symmech.impacts.adjugate import shared_denominators
+from symmech.impacts.adjugate_projectors import shared_denominators
 
 if TYPE_CHECKING:
-    from symmech.impacts.projectors import ImpactProjectors
+    from symmech.impacts.impact_projectors import ImpactProjectors
 
 __all__ = [
     "FACTOR_MAX_OPS",
@@ -456,7 +456,7 @@ def impact_singularities(
     for the default wall velocity of a moving wall, and the denominators of the inputs
     (entries of g, d psi, nu, psi_t and the ``extra`` expressions, e.g. a given wall
     velocity).  These are the shared denominators of the adjugate route
-    (:mod:`symmech.impacts.adjugate`; formed here when another route built ``proj``), and
+    (:mod:`symmech.impacts.adjugate_projectors`; formed here when another route built ``proj``), and
     the list is then complete; only when the entries admit no rational-function field are
     they formed by sympy determinants and the small entries of ``closed_form`` scanned.
     The small entries of ``also_scan`` (e.g. the weights of the energy law, which divide

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from symmech.geometry.simplification import Level, tidy_matrix
-from symmech.impacts.projectors import ImpactProjectors
+from symmech.impacts.impact_projectors import ImpactProjectors
 from symmech.impacts.stability import stable_coefficient
 
 __all__ = ["EnergyLaw", "energy_law"]

@@ -39,10 +39,10 @@ from symmech.impacts.degeneracy import (
     impact_singularities,
     points_on_wall,
 )
+from symmech.impacts.energy_forms import Affine, QuadraticForm, common_domain
 from symmech.impacts.energy_law import EnergyLaw, energy_law
+from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
 from symmech.impacts.newton import newton_map
-from symmech.impacts.projectors import ImpactProjectors, impact_projectors
-from symmech.impacts.quadratic import Affine, QuadraticForm, common_domain
 from symmech.impacts.stability import stable_coefficient, stable_matrix
 
 if TYPE_CHECKING:
@@ -67,7 +67,7 @@ class ImpactMap:
         moving wall).  For the energy law both raise :class:`~symmech.ImpactError`.
     projectors:
         The Carnot-paper objects P, Q, Y^A, P(Y^A), C^AB, beta^B, QQ, PP, T~, Q~, P~
-        (:class:`~symmech.impacts.projectors.ImpactProjectors`).
+        (:class:`~symmech.impacts.impact_projectors.ImpactProjectors`).
     wall_velocity, W:
         V (the wall velocity used; the default is the g-normal velocity
         ``-psi_t grad psi / g(grad psi, grad psi)``) and

@@ -1,7 +1,7 @@
 """Route (B): the impulse-momentum (KKT) system, solved as one linear system.
 
 An independent derivation of the Newton-law impact map, used to cross-check the
-projector formulas of :mod:`symmech.impacts.projectors` / :mod:`symmech.impacts.newton`.
+projector formulas of :mod:`symmech.impacts.impact_projectors` / :mod:`symmech.impacts.newton`.
 It shares no code with them.  Unknowns: v+ (n), the impulsive multipliers lambda (m, the
 permanent constraints), mu_0 (the wall) and mu_1 (l, the impulsive constraints).
 Equations (Carnot paper 002, eq. 6 and eqs. 9, 15, 19, 20):

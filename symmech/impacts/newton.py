@@ -1,6 +1,6 @@
 """Newton's restitution law: the linear impact map of the Carnot paper (002).
 
-With the projectors of :mod:`symmech.impacts.projectors` and the restitution coefficient
+With the projectors of :mod:`symmech.impacts.impact_projectors` and the restitution coefficient
 alpha, the post-impact velocity is affine in the pre-impact velocity,
 ``v+ = matrix v- + offset``, where
 
@@ -39,7 +39,7 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.geometry.simplification import Level, tidy_matrix
-from symmech.impacts.projectors import ImpactProjectors
+from symmech.impacts.impact_projectors import ImpactProjectors
 
 __all__ = ["newton_map", "wall_velocity", "wall_velocity_components"]
 

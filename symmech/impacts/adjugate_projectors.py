@@ -141,7 +141,7 @@ def adjugate_route(
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
     cancel: bool = True,
 ) -> tuple[dict[str, sp.Matrix], Denominators] | None:
-    """The objects of :class:`~symmech.impacts.projectors.ImpactProjectors` (a dict keyed
+    """The objects of :class:`~symmech.impacts.impact_projectors.ImpactProjectors` (a dict keyed
     by the attribute names) and the shared denominators, by the formulas of the module
     docstring; ``None`` when the field is not a rational-function field or the term
     budget is exceeded.  ``check(C, PY)`` is called before C^AB is inverted.  With

@@ -37,8 +37,8 @@ from sympy.polys.matrices import DomainMatrix
 from symmech.constraints.projectors import projectors as permanent_projectors
 from symmech.constraints.projectors import solve_spd
 from symmech.geometry.simplification import Level, tidy, tidy_matrix
-from symmech.impacts.adjugate import Denominators, adjugate_route
-from symmech.impacts.quadratic import common_domain
+from symmech.impacts.adjugate_projectors import Denominators, adjugate_route
+from symmech.impacts.energy_forms import common_domain
 
 __all__ = ["ImpactProjectors", "impact_projectors"]
 
@@ -53,7 +53,7 @@ class ImpactProjectors:
     (section 3.2), ``T`` (T~, Prop. 3.4), ``Qt`` and ``Pt`` (Q~ and P~, eq. 7) and ``N``
     (the column ``sum_A C_A0 P(Y^A)`` spanning Im T~).  ``denominators`` holds the
     shared polynomial denominators when the adjugate route built the objects
-    (:class:`~symmech.impacts.adjugate.Denominators`), else None.
+    (:class:`~symmech.impacts.adjugate_projectors.Denominators`), else None.
     """
 
     g: sp.ImmutableMatrix
@@ -113,7 +113,7 @@ def impact_projectors(
     is the simplification level of :mod:`symmech.geometry.simplification`.  With a level
     other than ``"none"`` the algebra is exact: over the rationals when every entry is a
     number (:func:`_in_field`), else by the adjugate route of
-    :mod:`symmech.impacts.adjugate` (polynomial arithmetic, one shared denominator per
+    :mod:`symmech.impacts.adjugate_projectors` (polynomial arithmetic, one shared denominator per
     object, cost-bounded final cancellation), which yields cancelled entries when they
     are small.  Otherwise, or when that route declines, the objects are built with
     sympy arithmetic, inverses as ``adj/det``, and :func:`~symmech.geometry.
