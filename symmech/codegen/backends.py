@@ -30,6 +30,7 @@ import jinja2
 import jinja2.meta
 import sympy as sp
 
+from symmech.codegen import c_signatures
 from symmech.codegen.escape import c_comment, c_string, python_comment, python_docstring
 from symmech.codegen.printers import SymmechCPrinter, SymmechMathPrinter, SymmechNumPyPrinter
 from symmech.codegen.unroll import CDialect, Dialect, NumPyDialect, ScalarDialect
@@ -145,7 +146,8 @@ def template_root() -> Path:
 @cache
 def environment() -> jinja2.Environment:
     """The strict Jinja environment over :func:`template_root`, with the escape filters
-    of :data:`ESCAPE_FILTERS`."""
+    of :data:`ESCAPE_FILTERS` and the C argument lists of :mod:`symmech.codegen.c_signatures`
+    as globals."""
     env = jinja2.Environment(
         loader=jinja2.FileSystemLoader(str(template_root())),
         undefined=jinja2.StrictUndefined,
@@ -155,6 +157,12 @@ def environment() -> jinja2.Environment:
         autoescape=False,
     )
     env.filters.update(ESCAPE_FILTERS)
+    env.globals.update(
+        c_parameters=c_signatures.parameters,
+        c_batch_parameters=c_signatures.batch_parameters,
+        c_call_arguments=c_signatures.call_arguments,
+        c_scaled_arguments=c_signatures.scaled_arguments,
+    )
     return env
 
 
