@@ -300,6 +300,12 @@ CODE = {
     "s",
     "a",
     "mac",
+    # C argument lists printed by symmech.codegen.c_signatures from a function's flags
+    "c_parameters",
+    "c_batch_parameters",
+    "c_call_arguments",
+    "c_scaled_arguments",
+    "n_inputs",
     "step_docs",
     "fn.step",
     "parameters",
