@@ -305,7 +305,6 @@ CODE = {
     "c_batch_parameters",
     "c_call_arguments",
     "c_scaled_arguments",
-    "n_inputs",
     "step_docs",
     "fn.step",
     "parameters",
