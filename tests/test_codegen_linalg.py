@@ -15,8 +15,9 @@ from codegen_support import require_c_compiler
 
 import symmech as sm
 from symmech import codegen
+from symmech.codegen.dialects import NumPyDialect
 from symmech.codegen.lower import step_flops
-from symmech.codegen.unroll import NumPyDialect, trace_step
+from symmech.codegen.unroll import trace_step
 
 
 def _ball_1d() -> sm.Scene:

@@ -31,9 +31,9 @@ import jinja2.meta
 import sympy as sp
 
 from symmech.codegen import c_signatures
+from symmech.codegen.dialects import CDialect, Dialect, NumPyDialect, ScalarDialect
 from symmech.codegen.escape import c_comment, c_string, python_comment, python_docstring
 from symmech.codegen.printers import SymmechCPrinter, SymmechMathPrinter, SymmechNumPyPrinter
-from symmech.codegen.unroll import CDialect, Dialect, NumPyDialect, ScalarDialect
 
 __all__ = [
     "BACKENDS",

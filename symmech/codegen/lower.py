@@ -56,6 +56,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from symmech.codegen.dialects import Dialect
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
 from symmech.codegen.printers import (
     correctly_rounded,
@@ -64,7 +65,7 @@ from symmech.codegen.printers import (
     product_power,
     safe_rewrite,
 )
-from symmech.codegen.unroll import STEP_INPUTS, Dialect, Program, trace_step
+from symmech.codegen.unroll import STEP_INPUTS, Program, trace_step
 from symmech.declaration.symbols import t as TIME
 
 __all__ = ["LoweredFunction", "Names", "lower", "step_flops"]
