@@ -38,7 +38,10 @@ import symmech as sm
 from symmech.codegen import CodegenError, generate
 from symmech.declaration import shapes
 from symmech.examples import body_pendulum_rotor, trig_wall
-from symmech.impacts import derive_impact_map, kkt_post_velocity
+from symmech.impacts import derive_impact_map
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+from kkt_oracle import kkt_post_velocity
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from scale_support import cart_with_tip_wall, chaplygin_ball_wall

@@ -3,16 +3,16 @@
 ``impact_map(scene, wall, law)`` goes through ``Scene.impact_map`` (the public entry
 point).  ``kkt(scene, wall, v_minus)`` is route (B): the impulse-momentum system built
 here from the declaration alone (metric, constraint rows, d psi computed in this file),
-solved by :func:`symmech.impacts.kkt_post_velocity`, sharing no code with the projector
-route.  ``basis_of_D(scene)`` parametrises D by a nullspace basis (not by the projector P).
+solved by :func:`kkt_oracle.kkt_post_velocity` (tests/kkt_oracle.py), sharing no code with
+the projector route.  ``basis_of_D(scene)`` parametrises D by a nullspace basis (not by the projector P).
 """
 
 from __future__ import annotations
 
 import sympy as sp
+from kkt_oracle import kkt_post_velocity
 
 import symmech as sm
-from symmech.impacts import kkt_post_velocity
 
 
 def impact_map(scene: sm.Scene, wall, law=None, **kwargs):

@@ -4,8 +4,8 @@
   a wall (Carnot paper 002: eq. 10, Prop. 3.4, eq. 17, Prop. 4.2; text 001: Theorem 2.12
   and the energy law of section 3.2).  ``Scene.impact_map(wall)`` is the usual entry point.
 * :class:`CarnotResult`: the residual of Carnot's theorems 3.2/3.6/3.9/3.11/4.1/4.3.
-* :func:`kkt_post_velocity`: the independent impulse-momentum (KKT) route, for
-  cross-checks.
+* The independent impulse-momentum (KKT) route that cross-checks these maps is a test
+  oracle: ``tests/kkt_oracle.py``.
 * :mod:`symmech.impacts.stability`: the stabilising step for float64 evaluation.
 * :mod:`symmech.impacts.adjugate_projectors`: the cost-bounded exact route for the projectors
   (adjugates over the polynomial ring, one shared denominator, bounded final gcds).
@@ -18,7 +18,6 @@ from symmech.impacts.degeneracy import Singularity
 from symmech.impacts.energy_law import EnergyLaw
 from symmech.impacts.impact_map import LAWS, ImpactMap, derive_impact_map
 from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
-from symmech.impacts.kkt import kkt_post_velocity
 from symmech.impacts.stability import stable_coefficient, stable_linear, stable_matrix
 
 __all__ = [
@@ -30,7 +29,6 @@ __all__ = [
     "Singularity",
     "derive_impact_map",
     "impact_projectors",
-    "kkt_post_velocity",
     "stable_coefficient",
     "stable_linear",
     "stable_matrix",

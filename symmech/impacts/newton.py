@@ -30,8 +30,9 @@ tangential part matters through eq. 20, ``nu(v+ - V) = 0``).
 Domain.  The paper derives these maps for ``v- in D``.  For ``v-`` outside D the matrix
 still acts, but ``QQ`` and ``T~`` annihilate D^perp, so the component ``Q v-`` passes
 through unchanged and ``v+`` is not in D: the map is meaningful on D only.  (The KKT
-system of :mod:`symmech.impacts.kkt` does have a solution for ``v-`` outside D, but it
-is a different model, with the permanent constraints also acting impulsively.)
+system of the tests' oracle, ``tests/kkt_oracle.py``, does have a solution for ``v-``
+outside D, but it is a different model, with the permanent constraints also acting
+impulsively.)
 """
 
 from __future__ import annotations

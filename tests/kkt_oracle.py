@@ -1,4 +1,4 @@
-"""Route (B): the impulse-momentum (KKT) system, solved as one linear system.
+"""The tests' oracle, route (B): the impulse-momentum (KKT) system, solved as one linear system.
 
 An independent derivation of the Newton-law impact map, used to cross-check the
 projector formulas of :mod:`symmech.impacts.impact_projectors` / :mod:`symmech.impacts.newton`.
