@@ -4,7 +4,8 @@
 point).  ``kkt(scene, wall, v_minus)`` is route (B): the impulse-momentum system built
 here from the declaration alone (metric, constraint rows, d psi computed in this file),
 solved by :func:`kkt_oracle.kkt_post_velocity` (tests/kkt_oracle.py), sharing no code with
-the projector route.  ``basis_of_D(scene)`` parametrises D by a nullspace basis (not by the projector P).
+the projector route.  ``basis_of_D(scene)`` parametrises D by a nullspace basis (not by
+the projector P).
 """
 
 from __future__ import annotations
