@@ -1,7 +1,11 @@
 """Built-in scenes from the texts: a model zoo shared by the CLI, tests, docs and benchmarks.
 
-Each function returns a fresh :class:`~symmech.Scene`; :data:`EXAMPLES` maps the names the
-command line uses to those functions and a one-line description.
+The scene files ``symmech/scenes/*.toml`` are the single source of the named scenes: each
+function here loads its file (a fresh :class:`~symmech.Scene` per call; the file also holds
+the parameters' default values, see :func:`symmech.read_scene`).  Only the parametrised
+families (:func:`pendulum_on_cart`, :func:`newtons_cradle`) and two stress scenes are built
+in Python.  :data:`EXAMPLES` maps the names the command line uses to these functions and a
+one-line description.
 """
 
 from __future__ import annotations
@@ -11,11 +15,11 @@ from collections.abc import Callable
 
 import sympy as sp
 
-from symmech.declaration import shapes
 from symmech.declaration.symbols import coordinates, t, velocities
 from symmech.declaration.wall import Wall
 from symmech.errors import SceneError
 from symmech.scene import Scene
+from symmech.scenefile import builtin_scene_path, load_scene
 
 __all__ = [
     "EXAMPLES",
@@ -39,19 +43,45 @@ __all__ = [
 ]
 
 
+def _builtin(name: str) -> Scene:
+    """The shipped scene file ``symmech/scenes/<name>.toml`` (whatever the current folder
+    holds)."""
+    return load_scene(builtin_scene_path(name))
+
+
+def _with_wall(scene: Scene, **changes: object) -> Scene:
+    """``scene`` with its (single) wall rebuilt with ``changes`` (restitution, law)."""
+    decl = scene.declaration
+    (w,) = decl.walls
+    wall = Wall(
+        w.psi,
+        restitution=changes.get("restitution", w.restitution),
+        impulsive_constraints=[
+            list(w.impulsive_matrix.row(i)) for i in range(w.impulsive_matrix.rows)
+        ],
+        name=w.wall.name or None,
+        law=str(changes.get("law", w.law)),
+        velocity=w.wall.velocity,
+    )
+    return Scene(
+        decl.coordinates,
+        metric=decl.metric,
+        potential=decl.potential,
+        forces=decl.forces,
+        constraints=[list(decl.constraint_matrix.row(a)) for a in range(decl.m)],
+        frame=decl.frame,
+        quasi_velocities=decl.velocities if decl.frame is not None else None,
+        walls=[wall],
+        name=decl.name,
+    )
+
+
 def bouncing_ellipse(restitution: object = 1) -> Scene:
     """Text 001, section 3.1: a planar ellipse (mass m, inertia I, semi-axes a, b) hits the
     wall x = 0 from the side x < 0.  ``psi = -x - sqrt(a^2 cos^2 theta + b^2 sin^2 theta)``
     (support function; exact for every orientation)."""
-    x, y, th = coordinates("x y theta")
-    m, I, a, b = sp.symbols("m I a b", positive=True)
-    psi = shapes.ellipse_gap((x, y), th, (a, b), shapes.Plane((0, 0), (-1, 0)))
-    return Scene(
-        (x, y, th),
-        metric=sp.diag(m, m, I),
-        walls=[Wall(psi, restitution=restitution, name="wall")],
-        name="bouncing_ellipse",
-    )
+    scene = _builtin("bouncing_ellipse")
+    return scene if restitution == 1 else _with_wall(scene, restitution=restitution)
 
 
 def spinning_disk(law: str = "energy") -> Scene:
@@ -60,65 +90,27 @@ def spinning_disk(law: str = "energy") -> Scene:
     contact point (x + R, y) moves with ``(x_dot, y_dot + R theta_dot)`` (theta
     counter-clockwise), so rolling is the text's ``y_dot + R theta_dot = 0``, and the
     rebound x_dot+ is the text's negative root."""
-    x, y, th = coordinates("x y theta")
-    _, yd, thd = velocities((x, y, th))
-    m, I, R = sp.symbols("m I R", positive=True)
-    psi = shapes.disk_gap((x, y), R, shapes.Plane((0, 0), (-1, 0)))
-    wall = Wall(psi, restitution=1, impulsive_constraints=[yd + R * thd], name="wall", law=law)
-    return Scene((x, y, th), metric=sp.diag(m, m, I), walls=[wall], name="spinning_disk")
+    scene = _builtin("spinning_disk")
+    return scene if law == "energy" else _with_wall(scene, law=law)
 
 
 def carnot_3_7() -> Scene:
     """Carnot paper, example 3.7: a disc (radius R, mass m, inertia m k^2) moving in a
     vertical plane hits the rough wall y = R; at impact ``x_dot - R theta_dot = 0``."""
-    x, y, th = coordinates("x y theta")
-    xd, _, thd = velocities((x, y, th))
-    m, k, R = sp.symbols("m k R", positive=True)
-    alpha = sp.Symbol("alpha", nonnegative=True)
-    wall = Wall(y - R, restitution=alpha, impulsive_constraints=[xd - R * thd], name="rough_wall")
-    return Scene((x, y, th), metric=sp.diag(m, m, m * k**2), walls=[wall], name="carnot_3_7")
-
-
-def _rolling_sphere(psi: sp.Expr, name: str) -> Scene:
-    x, y, z, phi, theta, psi_ang = coordinates("x y z phi theta psi")
-    vx, vy, vz, wx, wy, wz = sp.symbols("v_x v_y v_z omega_x omega_y omega_z", real=True)
-    k, r = sp.symbols("k r", positive=True)
-    alpha = sp.Symbol("alpha", nonnegative=True)
-    # (omega_x, omega_y, omega_z) = B (phi_dot, theta_dot, psi_dot), Carnot paper ex. 3.13
-    B = sp.Matrix(
-        [
-            [sp.sin(theta) * sp.sin(psi_ang), sp.cos(psi_ang), 0],
-            [-sp.sin(theta) * sp.cos(psi_ang), sp.sin(psi_ang), 0],
-            [sp.cos(theta), 0, 1],
-        ]
-    )
-    Binv = sp.simplify(B.inv())
-    S = sp.diag(sp.eye(3), Binv)
-    wall_psi = psi.subs(sp.Symbol("x", real=True), x)
-    wall = Wall(wall_psi, restitution=alpha, impulsive_constraints=[vy - r * wz], name="rough_wall")
-    return Scene(
-        (x, y, z, phi, theta, psi_ang),
-        metric=sp.diag(1, 1, 1, k**2, k**2, k**2),
-        constraints=[vx - r * wy, vy + r * wx, vz],
-        frame=S,
-        quasi_velocities=(vx, vy, vz, wx, wy, wz),
-        walls=[wall],
-        name=name,
-    )
+    return _builtin("carnot_3_7")
 
 
 def carnot_3_13() -> Scene:
     """Carnot paper, example 3.13: a sphere (radius r, mass 1, inertia k^2) rolling on a
     horizontal plane hits the rough wall x = 0; written in the angular velocities
     (quasi-velocities) with Euler angles (phi, theta, psi) as coordinates."""
-    return _rolling_sphere(sp.Symbol("x", real=True), "carnot_3_13")
+    return _builtin("carnot_3_13")
 
 
 def carnot_4_4() -> Scene:
     """Carnot paper, example 4.4: the rolling sphere of example 3.13 hits the moving wall
     x = f(t)."""
-    f = sp.Function("f", real=True)
-    return _rolling_sphere(sp.Symbol("x", real=True) - f(t), "carnot_4_4")
+    return _builtin("carnot_4_4")
 
 
 def rolling_ball() -> Scene:
@@ -130,47 +122,49 @@ def rolling_ball() -> Scene:
     omega_z) of Carnot paper ex. 3.13.  Rolling fixes the centre's velocity to
     ``r (omega_y, -omega_x, 0)``, so the kinetic energy reduced to SO(3) is
     ``T = 1/2 (k^2 + r^2) (omega_x^2 + omega_y^2) + 1/2 k^2 omega_z^2``."""
-    phi, theta, psi_ang = coordinates("phi theta psi")
-    wx, wy, wz = sp.symbols("omega_x omega_y omega_z", real=True)
-    k, r = sp.symbols("k r", positive=True)
-    # q_dot = S omega with S = B^-1, B of Carnot paper ex. 3.13 (see _rolling_sphere)
-    S = sp.Matrix(
-        [
-            [sp.sin(psi_ang) / sp.sin(theta), -sp.cos(psi_ang) / sp.sin(theta), 0],
-            [sp.cos(psi_ang), sp.sin(psi_ang), 0],
-            [
-                -sp.sin(psi_ang) * sp.cos(theta) / sp.sin(theta),
-                sp.cos(psi_ang) * sp.cos(theta) / sp.sin(theta),
-                1,
-            ],
-        ]
-    )
-    return Scene(
-        (phi, theta, psi_ang),
-        metric=sp.diag(k**2 + r**2, k**2 + r**2, k**2),
-        constraints=[wz],
-        frame=S,
-        quasi_velocities=(wx, wy, wz),
-        name="rolling_ball",
-    )
+    return _builtin("rolling_ball")
 
 
 def car() -> Scene:
     """Slides 000, "Driving a car": (x, y, theta, kappa) with the admissible directions
     span{(cos theta, sin theta, kappa, 0), (0, 0, 0, 1)}, written as two constraints
     (no side slip; heading rate = curvature times speed)."""
-    x, y, th, kap = coordinates("x y theta kappa")
-    xd, yd, thd, _ = velocities((x, y, th, kap))
-    m, J, c = sp.symbols("m J c", positive=True)
-    return Scene(
-        (x, y, th, kap),
-        metric=sp.diag(m, m, J, c),
-        constraints=[
-            sp.sin(th) * xd - sp.cos(th) * yd,
-            thd - kap * (sp.cos(th) * xd + sp.sin(th) * yd),
-        ],
-        name="car",
-    )
+    return _builtin("car")
+
+
+def bouncing_ball() -> Scene:
+    """A ball (mass m) falling under gravity g onto the floor y = 0 with restitution alpha:
+    ``T = m y_dot^2 / 2``, ``V = m g y``, ``psi = y``.  Dropped from rest at height h it
+    comes to rest at ``t* = sqrt(2h/g) (1 + alpha)/(1 - alpha)`` (alpha < 1)."""
+    return _builtin("bouncing_ball")
+
+
+def ellipse_gravity() -> Scene:
+    """Text 001, section 3.1, under gravity: the ellipse (mass m, inertia I, semi-axes a, b)
+    falls onto the floor y = 0 with restitution alpha;
+    ``psi = y - sqrt(a^2 sin^2 theta + b^2 cos^2 theta)`` (support function)."""
+    return _builtin("ellipse_gravity")
+
+
+def disk_3_7_gravity() -> Scene:
+    """Carnot paper, example 3.7, under gravity: the disc (radius R, mass m, inertia m k^2)
+    falls onto the rough floor y = R, rolls at each impact (``x_dot - R theta_dot = 0``)
+    and restitutes the normal velocity with alpha."""
+    return _builtin("disk_3_7_gravity")
+
+
+def pendulum_wall() -> Scene:
+    """A pendulum (point mass m on a massless rod of length l, angle theta from the downward
+    vertical, gravity g) swinging into the vertical wall x = d (d < l):
+    ``psi = d - l sin theta``, restitution alpha."""
+    return _builtin("pendulum_wall")
+
+
+def stiff_dumbbell() -> Scene:
+    """A stiff scene: two masses m at heights y1 <= y2 joined by a spring of stiffness k and
+    rest length L (k up to 1e8), falling under gravity g; the lower one bounces on the floor
+    y1 = 0 with restitution alpha.  ``V = m g (y1 + y2) + k (y2 - y1 - L)^2 / 2``."""
+    return _builtin("stiff_dumbbell")
 
 
 def pendulum_on_cart(n: int) -> Scene:
@@ -259,66 +253,6 @@ def body_pendulum_rotor() -> Scene:
     )
 
 
-# ------------------------------------------------------------------ simulation scenes
-#
-# Scenes for the hybrid simulator (symmech.simulate): gravity, restitution as a parameter,
-# and the references its tests and benchmarks need (closed forms where they exist).
-
-
-def _alpha() -> sp.Symbol:
-    return sp.Symbol("alpha", nonnegative=True)
-
-
-def bouncing_ball() -> Scene:
-    """A ball (mass m) falling under gravity g onto the floor y = 0 with restitution alpha:
-    ``T = m y_dot^2 / 2``, ``V = m g y``, ``psi = y``.  Dropped from rest at height h it
-    comes to rest at ``t* = sqrt(2h/g) (1 + alpha)/(1 - alpha)`` (alpha < 1)."""
-    (y,) = coordinates("y")
-    m, g = sp.symbols("m g", positive=True)
-    return Scene(
-        (y,),
-        metric=sp.Matrix([[m]]),
-        potential=m * g * y,
-        walls=[Wall(y, restitution=_alpha(), name="floor")],
-        name="bouncing_ball",
-    )
-
-
-def ellipse_gravity() -> Scene:
-    """Text 001, section 3.1, under gravity: the ellipse (mass m, inertia I, semi-axes a, b)
-    falls onto the floor y = 0 with restitution alpha;
-    ``psi = y - sqrt(a^2 sin^2 theta + b^2 cos^2 theta)`` (support function)."""
-    x, y, th = coordinates("x y theta")
-    m, I, a, b, g = sp.symbols("m I a b g", positive=True)
-    psi = shapes.ellipse_gap((x, y), th, (a, b), shapes.Plane.axis("y"))
-    return Scene(
-        (x, y, th),
-        metric=sp.diag(m, m, I),
-        potential=m * g * y,
-        walls=[Wall(psi, restitution=_alpha(), name="floor")],
-        name="ellipse_gravity",
-    )
-
-
-def disk_3_7_gravity() -> Scene:
-    """Carnot paper, example 3.7, under gravity: the disc (radius R, mass m, inertia m k^2)
-    falls onto the rough floor y = R, rolls at each impact (``x_dot - R theta_dot = 0``)
-    and restitutes the normal velocity with alpha."""
-    x, y, th = coordinates("x y theta")
-    xd, _, thd = velocities((x, y, th))
-    m, k, R, g = sp.symbols("m k R g", positive=True)
-    wall = Wall(
-        y - R, restitution=_alpha(), impulsive_constraints=[xd - R * thd], name="rough_floor"
-    )
-    return Scene(
-        (x, y, th),
-        metric=sp.diag(m, m, m * k**2),
-        potential=m * g * y,
-        walls=[wall],
-        name="disk_3_7_gravity",
-    )
-
-
 def newtons_cradle(balls: int = 3) -> Scene:
     """Newton's cradle as a chain of ``balls`` equal balls (mass m, radius r) on a line,
     ``x_i`` their centres; the walls ``x_{i+1} - x_i - 2 r >= 0`` are elastic (alpha = 1)
@@ -332,36 +266,6 @@ def newtons_cradle(balls: int = 3) -> Scene:
         Wall(xs[i + 1] - xs[i] - 2 * r, restitution=1, name=f"contact{i}") for i in range(balls - 1)
     ]
     return Scene(xs, metric=sp.eye(balls) * m, walls=walls, name=f"newtons_cradle_{balls}")
-
-
-def pendulum_wall() -> Scene:
-    """A pendulum (point mass m on a massless rod of length l, angle theta from the downward
-    vertical, gravity g) swinging into the vertical wall x = d (d < l):
-    ``psi = d - l sin theta``, restitution alpha."""
-    (th,) = coordinates("theta")
-    m, l, g, d = sp.symbols("m l g d", positive=True)
-    return Scene(
-        (th,),
-        metric=sp.Matrix([[m * l**2]]),
-        potential=-m * g * l * sp.cos(th),
-        walls=[Wall(d - l * sp.sin(th), restitution=_alpha(), name="wall")],
-        name="pendulum_wall",
-    )
-
-
-def stiff_dumbbell() -> Scene:
-    """A stiff scene: two masses m at heights y1 <= y2 joined by a spring of stiffness k and
-    rest length L (k up to 1e8), falling under gravity g; the lower one bounces on the floor
-    y1 = 0 with restitution alpha.  ``V = m g (y1 + y2) + k (y2 - y1 - L)^2 / 2``."""
-    y1, y2 = coordinates("y1 y2")
-    m, g, k, L = sp.symbols("m g k L", positive=True)
-    return Scene(
-        (y1, y2),
-        metric=sp.diag(m, m),
-        potential=m * g * (y1 + y2) + k * (y2 - y1 - L) ** 2 / 2,
-        walls=[Wall(y1, restitution=_alpha(), name="floor")],
-        name="stiff_dumbbell",
-    )
 
 
 EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {

@@ -2,10 +2,13 @@
 survives dump and load, and hostile or malformed files are refused with clear errors and
 without running anything.
 
-Expected values are independent of the code under test: the Python scenes of
-:mod:`symmech.examples` (a second, separately written source of truth), formulas of the
-texts typed in by hand, and error messages that name the field, line and token written
-into each test file.
+Expected values are independent of the code under test: the Python-built families of
+:mod:`symmech.examples` (``pendulum_on_cart``, ``newtons_cradle``: a second, separately
+written source for their files), formulas of the texts typed in by hand, and error
+messages that name the field, line and token written into each test file.  The named
+examples load the scene files (their single source), which the textbook checks
+(:mod:`symmech.verify`, ``tests/test_impacts_examples.py``) and the simulator's closed
+forms test.
 """
 
 from __future__ import annotations
