@@ -126,7 +126,7 @@ def _has_dynamic(values: Iterable[object], time: sp.Symbol) -> bool:
             stack.extend(value)
         elif isinstance(value, list | tuple):
             stack.extend(value)
-        elif isinstance(value, sp.Basic) and time in value.free_symbols:
+        elif isinstance(value, sp.Basic) and value.has(time):  # cheap: no free-symbol sets
             if any(_is_dynamic(a, time) for a in value.atoms(AppliedUndef)):
                 return True
     return False
