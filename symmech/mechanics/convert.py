@@ -39,16 +39,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import numpy as np
 import sympy as sp
 
+from symmech.declaration.checks import Points
+from symmech.declaration.numeric import rank_at, vanishes
 from symmech.errors import SceneError
 
 __all__ = ["scene_arguments"]
-
-#: random points at which the potential of a constant force is checked against its
-#: generalized active force, and the constraint rows for independence
-_CHECK_POINTS = 3
 
 
 def _me():
@@ -338,28 +335,13 @@ def _loads(model: _Model) -> tuple[sp.Expr, list[sp.Expr]]:
     return V, F
 
 
-class _Point:
-    """Random values for every atom an expression holds: coordinates, speeds, q_dot,
-    parameters and other dynamic symbols (parameters in [0.5, 1.5], the rest in
-    [-1.2, 1.2]); each atom keeps its value across expressions."""
-
-    def __init__(self, seed: int):
-        self.rng = np.random.default_rng(seed)
-        self.values: dict[sp.Basic, sp.Float] = {}
-
-    def __call__(self, e: sp.Expr, digits: int = 30) -> complex:
-        from sympy.core.function import AppliedUndef
-
-        t = _me().dynamicsymbols._t
-        atoms = [*e.atoms(sp.Derivative), *e.atoms(AppliedUndef)]
-        atoms += [s for s in e.free_symbols if s != t]
-        for a in atoms:
-            if a not in self.values:
-                lo, hi = (0.5, 1.5) if isinstance(a, sp.Symbol) else (-1.2, 1.2)
-                self.values[a] = sp.Float(self.rng.uniform(lo, hi), digits)
-        derivs = {a: self.values[a] for a in atoms if isinstance(a, sp.Derivative)}
-        rest = {a: self.values[a] for a in atoms if not isinstance(a, sp.Derivative)}
-        return complex(sp.N(e.xreplace(derivs).xreplace(rest), digits))
+def _identically_zero(exprs: Sequence[sp.Expr]) -> bool:
+    """Whether every expression vanishes identically, judged as the declaration judges it
+    (:func:`~symmech.declaration.numeric.vanishes`: exact inputs at the sample points of
+    :class:`~symmech.declaration.checks.Points`, which give dynamic symbols and their
+    derivatives values of their own); one that cannot be evaluated counts as not zero."""
+    points = Points([])
+    return all(e == 0 or vanishes(e, points.for_(e)) is True for e in exprs)
 
 
 def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: _Model) -> bool:
@@ -367,12 +349,7 @@ def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: _Model) -> bool:
     to the force's generalized active force)."""
     grad = sp.Matrix([sp.diff(V, c) for c in model.q])
     lhs = model.S.T * grad if model.S is not None else grad
-    for seed in range(_CHECK_POINTS):
-        point = _Point(seed)
-        for a, b in zip(lhs, Fr, strict=True):
-            if abs(point(a + b)) > 1e-20 * (1 + abs(point(b))):
-                return False
-    return True
+    return _identically_zero([a + b for a, b in zip(lhs, Fr, strict=True)])
 
 
 def _constraint_rows(model: _Model) -> list[list[sp.Expr]]:
@@ -390,12 +367,11 @@ def _constraint_rows(model: _Model) -> list[list[sp.Expr]]:
         rows.append([sp.expand(e) for e in row])
     if not rows:
         return []
-    point = _Point(54321)
-    values = np.array([[point(e, 20).real for e in r] for r in rows], dtype=float)
+    M = sp.Matrix(rows)
+    point = Points([]).for_(M)[0]
     kept: list[int] = []
     for a in range(len(rows)):
-        trial = values[[*kept, a]]
-        if np.linalg.matrix_rank(trial, tol=1e-9 * max(1.0, np.abs(trial).max())) == len(kept) + 1:
+        if rank_at(M.extract([*kept, a], list(range(M.cols))), point) == len(kept) + 1:
             kept.append(a)
     return [rows[a] for a in kept]
 
@@ -454,12 +430,7 @@ def _embedded_correction(model: _Model, M: sp.Matrix) -> list[sp.Expr] | None:
     f_kane = [tr.expr(e, "inertia forces") for e in _inertia_forcing(model)]
     # not expanded: the scene adds f_geom back, and its terms cancel structurally
     diff = [a - b for a, b in zip(f_kane, f_geom, strict=True)]
-    for seed in range(_CHECK_POINTS):
-        point = _Point(100 + seed)
-        for d, a in zip(diff, f_kane, strict=True):
-            if abs(point(d)) > 1e-20 * (1 + abs(point(a))):
-                return diff
-    return None
+    return None if _identically_zero(diff) else diff
 
 
 def scene_arguments(model: object, *, walls: Sequence = (), name: str | None = None) -> dict:
