@@ -81,25 +81,37 @@ class _Loader(_NamesLoader):
         return out if ok else None
 
     def force_list(self, raw: object, n: int) -> list[sp.Expr] | None:
-        """``forces``: n expressions (absent: None, no applied forces)."""
+        """``forces``: n expressions (absent, or refused: None, the problem recorded)."""
         if raw is None:
             return None
         line = self.line(None, "forces")
-        self.field_lines["forces"] = line
+        return self.expression_array(raw, n, "forces", line, self.table, "generalized force")
+
+    def expression_array(
+        self,
+        raw: object,
+        n: int,
+        field: str,
+        line: int | None,
+        table: dict[str, sp.Expr],
+        what: str,
+    ) -> list[sp.Expr] | None:
+        """An array of ``n`` expressions, one ``what`` per velocity (``field[k]`` located
+        on its element); None when refused (every problem recorded)."""
+        self.field_lines[field] = line
         if not isinstance(raw, list) or len(raw) != n:
             got = f"{len(raw)} entries" if isinstance(raw, list) else _toml_type(raw)
             self.fail(
-                f"expected an array of {n} expressions (one generalized force per velocity),"
-                f" got {got}",
-                "forces",
+                f"expected an array of {n} expressions (one {what} per velocity), got {got}",
+                field,
                 line,
             )
             return None
         out = []
         for k, e in enumerate(raw):
             at = self.loc.element(line, e)
-            self.field_lines[f"forces[{k}]"] = at
-            out.append(self.expression(e, f"forces[{k}]", at, self.table))
+            self.field_lines[f"{field}[{k}]"] = at
+            out.append(self.expression(e, f"{field}[{k}]", at, table))
         return None if any(e is None for e in out) else out
 
     def walls(self, n: int) -> list[Wall]:
@@ -177,23 +189,10 @@ class _Loader(_NamesLoader):
         False when refused (the problem is recorded)."""
         if raw is None:
             return None
-        field_name = f"{label}.velocity"
-        line = self.line("walls", "velocity", k)
-        self.field_lines[field_name] = line
-        if not isinstance(raw, list) or len(raw) != n:
-            got = f"{len(raw)} entries" if isinstance(raw, list) else _toml_type(raw)
-            self.fail(
-                f"expected an array of {n} expressions (one component per velocity), got {got}",
-                field_name,
-                line,
-            )
-            return False
         table = {k_: e for k_, e in self.table.items() if e not in self.velocity_like}
-        out = [
-            self.expression(e, f"{field_name}[{j}]", self.loc.element(line, e), table)
-            for j, e in enumerate(raw)
-        ]
-        return False if any(e is None for e in out) else out
+        line = self.line("walls", "velocity", k)
+        out = self.expression_array(raw, n, f"{label}.velocity", line, table, "component")
+        return False if out is None else out
 
     def restitution(self, raw: object, label: str, k: int) -> sp.Expr | None:
         field_name = f"{label}.restitution"
