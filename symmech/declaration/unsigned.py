@@ -21,6 +21,15 @@ from symmech.declaration.symbols import t as TIME
 __all__ = ["check_metric_signs"]
 
 
+def _definite(G: sp.Matrix, point: dict) -> bool | None:
+    """Whether G is real and positive definite at ``point``; None where it has no value."""
+    try:
+        A, complex_ = real_values(G, point)
+    except EvaluationError:
+        return None
+    return not complex_ and classify_symmetric(A)[0] == "positive definite"
+
+
 def check_metric_signs(
     G: sp.Matrix,
     label: str,
@@ -69,23 +78,10 @@ def check_metric_signs(
         for m in first.items:
             problems.add(m)
         return None
-    definite = []
-    for point in pos_points.for_(G_pos):
-        try:
-            A, complex_ = real_values(G_pos, point)
-        except EvaluationError:
-            continue
-        if not complex_ and classify_symmetric(A)[0] == "positive definite":
-            definite.append(point)
+    definite = [p for p in pos_points.for_(G_pos) if _definite(G_pos, p) is True]
     needed = []
     for p, d in proxy.items():
-        flips = 0
-        for point in definite:
-            try:
-                A, complex_ = real_values(G_pos, {**point, d: -point[d]})
-            except EvaluationError:
-                continue
-            flips += complex_ or classify_symmetric(A)[0] != "positive definite"
-        if definite and flips == len(definite):
+        flipped = [_definite(G_pos, {**point, d: -point[d]}) for point in definite]
+        if definite and all(f is False for f in flipped):
             needed.append(p)
     return tuple(sorted(needed, key=atom_key))
