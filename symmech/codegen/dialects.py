@@ -4,6 +4,7 @@ variants) prints the traced :class:`~symmech.codegen.unroll.Program` as statemen
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 
@@ -158,10 +159,7 @@ class ScalarDialect(NumPyDialect):
         ]
 
     def allocate(self, out_shape: tuple[int, ...]) -> list[str]:
-        size = 1
-        for k in out_shape:
-            size *= k
-        return [f"out = [0.0] * {size}"]
+        return [f"out = [0.0] * {math.prod(out_shape)}"]
 
     def store(self, index: int, expr: str) -> str:
         return f"out[{index}] = {expr}"

@@ -51,6 +51,7 @@ unrolled code performs (``solve_flops``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -489,8 +490,8 @@ def _scalar_body(
     make_printer, dialect = scalar
     if callee is not None and callee.scalar is None:
         return None
-    if any(blk not in ("out", "M") for blk, _, _ in where) and program is None:
-        return None
+    if (program is None or check) and any(blk not in ("out", "M") for blk, _, _ in where):
+        return None  # a local block other than the output
     printer = make_printer(table)
     try:
         temporaries = [f"{s.name} = {printer.doprint(e)}" for s, e in replacements]
@@ -508,16 +509,11 @@ def _scalar_body(
         lines += [f"q = y[:{n}]", f"v = y[{n}:]"]
     lines += [f"{name} = {array}[{i}]" for array, i, name in unpack]
     lines += temporaries
-    out_size = 1
-    for k in f.out_shape:
-        out_size *= k
     if program is not None and not check:
         exprs = {(blk, flat): text for blk, flat, text in printed}
         lines += dialect.lines(program, f.out_shape, exprs)
     else:
-        if any(blk not in ("out", "M") for blk, _, _ in printed):
-            return None
-        lines.append(f"out = [0.0] * {out_size}")
+        lines.append(f"out = [0.0] * {math.prod(f.out_shape)}")
         lines += [f"out[{flat}] = {text}" for blk, flat, text in printed if blk == "out"]
         if check:
             assert program is not None
