@@ -50,30 +50,10 @@ def _builtin(name: str) -> Scene:
 
 
 def _with_wall(scene: Scene, **changes: object) -> Scene:
-    """``scene`` with its (single) wall rebuilt with ``changes`` (restitution, law)."""
-    decl = scene.declaration
-    (w,) = decl.walls
-    wall = Wall(
-        w.psi,
-        restitution=changes.get("restitution", w.restitution),
-        impulsive_constraints=[
-            list(w.impulsive_matrix.row(i)) for i in range(w.impulsive_matrix.rows)
-        ],
-        name=w.wall.name or None,
-        law=str(changes.get("law", w.law)),
-        velocity=w.wall.velocity,
-    )
-    return Scene(
-        decl.coordinates,
-        metric=decl.metric,
-        potential=decl.potential,
-        forces=decl.forces,
-        constraints=[list(decl.constraint_matrix.row(a)) for a in range(decl.m)],
-        frame=decl.frame,
-        quasi_velocities=decl.velocities if decl.frame is not None else None,
-        walls=[wall],
-        name=decl.name,
-    )
+    """``scene`` with its (single) wall rebuilt with ``changes`` (restitution, law); a new
+    restitution symbol joins the parameters (ordered by name, as the files order them)."""
+    (w,) = scene.walls
+    return scene.replace(walls=[w.as_wall(**changes)], parameters=None)
 
 
 def bouncing_ellipse(restitution: object = 1) -> Scene:

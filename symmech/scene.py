@@ -152,6 +152,14 @@ class Scene:
         """
         return cls(**scene_arguments(model, walls=list(walls), name=name))
 
+    def replace(self, **changes: Any) -> Scene:
+        """A new Scene declaring the same system with ``changes`` to the arguments of
+        :class:`Scene` (``walls=``, ``constraints=``, ``name=``, ...; ``parameters=None``
+        lets a new symbol in and orders them by name).  The rest is taken from the
+        declaration as resolved (:meth:`~symmech.declaration.spec.Declaration.arguments`)."""
+        args = {**self._decl.arguments(), **changes}
+        return type(self)(args.pop("coordinates"), **args)
+
     # -- immutability -----------------------------------------------------------------
     def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"Scene is immutable; cannot set {key!r} (build a new Scene)")

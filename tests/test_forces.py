@@ -265,3 +265,26 @@ tau = { description = "the push" }
         sm.reads_scene(
             "inputs = 3\n" + text.replace('[inputs]\ntau = { description = "the push" }\n', "")
         )
+
+
+def test_scene_replace_declares_the_same_system_again():
+    """Scene.replace rebuilds a scene from its resolved declaration (frame, constraints,
+    forces, walls with velocity) and applies only the changes asked for."""
+    from symmech.examples import carnot_3_13
+
+    sphere = carnot_3_13()
+    again = sphere.replace()
+    assert again.mass_matrix() == sphere.mass_matrix()
+    assert again.constraint_matrix == sphere.constraint_matrix
+    assert again.parameters == sphere.parameters
+    assert again.impact_map(0).post_velocity == sphere.impact_map(0).post_velocity
+    scene, _, _ = _cart_pendulum()
+    x, th = scene.coordinates
+    l = sp.Symbol("l", positive=True)
+    walled = scene.replace(walls=[sm.Wall(x + l * sp.sin(th) - 1, velocity=[0, 0], name="w")])
+    assert walled.forcing() == scene.forcing()
+    moved = walled.replace(name="moved")
+    assert moved.name == "moved" and moved.walls[0].velocity == walled.walls[0].velocity
+    alpha = sp.Symbol("alpha", nonnegative=True)
+    softer = walled.replace(walls=[walled.walls[0].as_wall(restitution=alpha)], parameters=None)
+    assert softer.walls[0].restitution == alpha and alpha in softer.parameters

@@ -61,6 +61,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import sympy as sp
 
@@ -131,6 +132,19 @@ class ResolvedWall:
     def law(self) -> str:
         return self.wall.law
 
+    def as_wall(self, **changes: object) -> Wall:
+        """The wall as a :class:`Wall` of its resolved expressions (impulsive constraints as
+        coefficient rows), with ``changes`` (``restitution=``, ``law=``, ...) applied."""
+        nu = self.impulsive_matrix
+        args: dict[str, Any] = {
+            "restitution": self.restitution,
+            "impulsive_constraints": [list(nu.row(i)) for i in range(nu.rows)],
+            "name": self.wall.name or None,
+            "law": self.law,
+            "velocity": None if self.velocity is None else list(self.velocity),
+        }
+        return Wall(changes.pop("psi", self.psi), **{**args, **changes})
+
     @property
     def moving(self) -> bool:
         """psi depends on t, or the wall has a declared velocity that is not zero."""
@@ -173,6 +187,24 @@ class Declaration:
     @property
     def has_frame(self) -> bool:
         return self.frame is not None
+
+    def arguments(self) -> dict[str, Any]:
+        """The keyword arguments of :class:`symmech.Scene` that declare this system again:
+        the metric in the velocity basis, the constraint rows, the walls rebuilt from their
+        resolved expressions (:meth:`ResolvedWall.as_wall`), the parameters in order."""
+        mu = self.constraint_matrix
+        return {
+            "coordinates": self.coordinates,
+            "metric": self.metric,
+            "potential": self.potential,
+            "forces": self.forces,
+            "constraints": [list(mu.row(a)) for a in range(mu.rows)],
+            "frame": self.frame,
+            "quasi_velocities": self.velocities if self.frame is not None else None,
+            "walls": [w.as_wall() for w in self.walls],
+            "parameters": self.parameters,
+            "name": self.name,
+        }
 
     def q_dot(self) -> sp.ImmutableMatrix:
         """q_dot as a column in the velocity basis: ``S v`` with a frame, else the q_dot symbols."""

@@ -85,17 +85,7 @@ def contact_scene(scene: Scene, wall: int) -> Scene | None:
     rows = contact_rows(scene, wall)
     if len(rows) >= decl.n:
         return None
-    return Scene(
-        decl.coordinates,
-        metric=decl.metric,
-        potential=decl.potential,
-        forces=decl.forces,
-        constraints=rows,
-        frame=decl.frame,
-        quasi_velocities=decl.velocities if decl.frame is not None else None,
-        parameters=decl.parameters,
-        name=f"{scene.name}_contact_{wall}",
-    )
+    return scene.replace(constraints=rows, walls=(), name=f"{scene.name}_contact_{wall}")
 
 
 def _number(value: object, what: str) -> float:
