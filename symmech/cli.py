@@ -110,10 +110,6 @@ class _Progress:
             print(line, file=sys.stderr, flush=True)
 
 
-def _silent(stage: str) -> None:
-    """A progress callback that prints nothing."""
-
-
 # ---------------------------------------------------------------------------------------
 # scenes
 

@@ -15,12 +15,9 @@ import sympy as sp
 
 from symmech.declaration.latex import latex_text
 from symmech.scene import Scene
+from symmech.verify import silent
 
 __all__ = ["MAX_DETAILED_N", "Derivation", "derivation"]
-
-
-def _silent(stage: str) -> None:
-    """A progress callback that prints nothing."""
 
 
 @dataclass
@@ -133,7 +130,7 @@ def _left_out(n: int, why: str) -> str:
 
 
 def derivation(
-    scene: Scene, progress: Callable[[str], None] = _silent, *, full: bool = False
+    scene: Scene, progress: Callable[[str], None] = silent, *, full: bool = False
 ) -> Derivation:
     """Derive and collect what ``symmech show`` prints for ``scene``.
 

@@ -23,11 +23,12 @@ from symmech.geometry.lie import hat, lie_bracket
 from symmech.scene import Scene
 from symmech.scenefile import builtin_scene_path, read_scene
 
-__all__ = ["Check", "checks", "verify"]
+__all__ = ["Check", "checks", "silent", "verify"]
 
 
-def _silent(stage: str) -> None:
-    """A progress callback that prints nothing."""
+def silent(stage: str) -> None:
+    """A progress callback that prints nothing (the default of :func:`verify` and
+    :func:`symmech.derivation.derivation`)."""
 
 
 @dataclass(frozen=True)
@@ -274,7 +275,7 @@ def checks() -> list[Check]:
     ]
 
 
-def verify(pattern: str | None = None, progress: Callable[[str], None] = _silent) -> int:
+def verify(pattern: str | None = None, progress: Callable[[str], None] = silent) -> int:
     """Run the checks whose example or quantity contains ``pattern`` (all by default),
     print the table ``example | quantity | result`` and return the number that failed.
     Raises :class:`~symmech.SceneError` when no check matches."""
