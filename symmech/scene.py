@@ -526,10 +526,16 @@ class Scene:
         """
         resolved = self.wall(wall)
         if wall_velocity is not None:
-            return derive_impact_map(self._decl, resolved, law, wall_velocity=wall_velocity)
+            return derive_impact_map(
+                self._decl,
+                resolved,
+                law,
+                wall_velocity=wall_velocity,
+                projectors=self.projectors(),
+            )
         return self._cached(
             ("impact", resolved.index, law),
-            lambda: derive_impact_map(self._decl, resolved, law),
+            lambda: derive_impact_map(self._decl, resolved, law, projectors=self.projectors()),
         )
 
     def kinematics(self) -> sp.ImmutableMatrix:

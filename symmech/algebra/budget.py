@@ -41,6 +41,7 @@ from symmech.errors import SymmechError
 
 __all__ = [
     "CARNOT_FIELD_OPS",
+    "CARNOT_FIELD_SECONDS",
     "CLOSED_FORM_MAX_N",
     "CLOSED_FORM_SECONDS",
     "CLOSED_FORM_TERMS",
@@ -113,6 +114,8 @@ ZERO_TEST_OPS = 200
 SINGULAR_FACTOR_OPS = 400
 #: operations, skip: the fraction-field Carnot residual (larger maps: exact evaluation).
 CARNOT_FIELD_OPS = 3000
+#: seconds, skip: ... and the time it may take (then: exact evaluation).
+CARNOT_FIELD_SECONDS = 2.0
 #: operations, skip: ``sympy.simplify`` of a quadratic form's coefficients.
 QUADRATIC_SIMPLIFY_OPS = 300
 

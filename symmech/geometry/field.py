@@ -66,6 +66,7 @@ __all__ = [
     "common_domain",
     "field_inverse",
     "field_solve",
+    "field_zero",
 ]
 
 Frac = Any  # a sympy FracElement
@@ -185,7 +186,7 @@ class RationalField:
         def convert(e: sp.Expr) -> Any:
             x = seen.get(e)
             if x is None:
-                x = seen[e] = self.K.from_sympy(self._in(e))
+                x = seen[e] = self.normal(self.K.from_sympy(self._in(e)))
             return x
 
         rows = [[convert(e) for e in M.row(i)] for i in range(M.rows)]
@@ -254,6 +255,13 @@ class RationalField:
         if a == x.numer and b == x.denom:
             return x
         return self.K.field.new(a, b)
+
+    def normal_matrix(self, M: Any) -> Any:
+        """A domain matrix with every entry in normal form (:meth:`normal`)."""
+        if self.K is None or not self.pairs:
+            return M
+        rows = [[self.normal(x) for x in row] for row in M.to_list()]
+        return DomainMatrix(rows, M.shape, self.K)
 
     def element(self, e: sp.Expr) -> Frac:
         """The sympy expression e as a normalised field element (memoised: the entries
@@ -463,6 +471,19 @@ def common_domain(
     """A domain holding every entry of ``matrices`` and every scalar."""
     exprs = [sp.sympify(e) for M in matrices for e in M] + [sp.sympify(s) for s in scalars]
     return RationalField(exprs, trig=trig)
+
+
+def field_zero(e: sp.Expr) -> bool:
+    """True when ``e`` is zero in the Pythagorean normal form of its own field (exact: a
+    "zero" is a proof, for functions and radicals are generators the true ones specialise);
+    False when that form is not zero or the field declines (no decision)."""
+    e = sp.sympify(e)
+    if e == 0:
+        return True
+    field = RationalField([e], trig=True)
+    if not field.exact:
+        return False
+    return not field.element(e)
 
 
 def field_solve(A: sp.MatrixBase, B: sp.MatrixBase) -> sp.Matrix | None:

@@ -7,13 +7,15 @@ trigonometric terms that alone took minutes.  Here every inverse is a closed for
 on the way, and each object of the Carnot paper (002) is assembled as a polynomial
 matrix over one shared polynomial denominator.  With the input denominators cleared
 (``g = Gr / gamma``, ``mu`` and ``A = [dpsi; nu]`` row by row, ``A = Lambda^{-1} Ar``; P,
-Q, QQ, T~, Q~ do not depend on the scale of the rows, and Lambda is put back into Y,
+QQ, T~, Q~ do not depend on the scale of the rows, and Lambda is put back into Y,
 P(Y^A), C^AB, C_AB, beta^B and N):
 
 * ``P g^{-1} = Pg / d1`` with ``Pg, d1`` the top-left block of the adjugate and the
   determinant of the bordered matrix ``B1 = [[Gr, mu^T], [mu, 0]]`` (``(B1^{-1})_11`` is
   the constrained inverse ``P g^{-1}`` of section 2.2); without permanent constraints
-  ``Pg = adj Gr``, ``d1 = det Gr``.  So ``P = Pg Gr / d1``;
+  ``Pg = adj Gr``, ``d1 = det Gr``.  (P itself, ``Pg Gr / d1``, is not formed here: the
+  impact takes the scene's P and Q, built once by
+  :func:`symmech.constraints.projectors.projectors`.)
 * ``P(Y^A) = gamma Pg Ar^T Lambda^{-1} / d1``, ``beta = Lambda^{-1} Ar Pg Gr / d1`` and
   ``C^{AB} = gamma Lambda^{-1} Cn Lambda^{-1} / d1`` with ``Cn = Ar Pg Ar^T``;
 * ``C_{AB} = Lambda Ka Lambda / (gamma dK)`` with ``dK = det Cn / d1^(k-1)`` and
@@ -111,11 +113,21 @@ def _exquo_all(M: DomainMatrix, d: Poly) -> DomainMatrix | None:
     return DomainMatrix(rows, M.shape, R)
 
 
-def _fraction(field: Any, num: Poly, den: Poly, cancel: bool) -> Any:
+def _fraction(
+    field: Any, num: Poly, den: Poly, cancel: bool, reduce: Callable[[Poly], Poly]
+) -> Any:
     """``num / den`` as an element of the fraction field: fully cancelled when small (see
-    the module docstring), else with the common monomial and content removed."""
+    the module docstring), else with the common monomial and content removed.  Numerator
+    and denominator are first put in the Pythagorean normal form (``reduce``:
+    ``sin^2 -> 1 - cos^2``) when that makes them shorter: so ``cos^2 / (sin^2 +
+    cos^2)`` becomes ``cos^2``, while ``I a^2 cos^2 + I b^2 sin^2`` keeps its shorter form."""
     if not num:
         return field.zero
+    rn, rd = reduce(num), reduce(den)
+    if not rn:
+        return field.zero
+    if len(rn) + len(rd) < len(num) + len(den):
+        num, den = rn, rd
     if (
         cancel
         and len(den) <= limits.IMPACT_GCD_TERMS
@@ -141,11 +153,12 @@ def adjugate_route(
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
     cancel: bool = True,
 ) -> tuple[dict[str, sp.Matrix], Denominators] | None:
-    """The objects of :class:`~symmech.impacts.impact_projectors.ImpactProjectors` (a dict keyed
-    by the attribute names) and the shared denominators, by the formulas of the module
-    docstring; ``None`` when the field is not a rational-function field or the term
-    budget is exceeded.  ``check(C, PY)`` is called before C^AB is inverted.  With
-    ``cancel=False`` no gcd is taken at all (the entries as the formulas build them)."""
+    """The objects of :class:`~symmech.impacts.impact_projectors.ImpactProjectors` other
+    than P and Q (a dict keyed by the attribute names) and the shared denominators, by the
+    formulas of the module docstring; ``None`` when the field is not a rational-function
+    field or the term budget is exceeded.  ``check(C, PY)`` is called before C^AB is
+    inverted.  With ``cancel=False`` no gcd is taken at all (the entries as the formulas
+    build them)."""
     K = field.K
     if K is None or not K.is_FractionField:
         return None
@@ -224,7 +237,7 @@ def shared_denominators(
 ) -> Denominators | None:
     """Only the shared denominators of the construction (cheap: no cancellation), or
     None when the entries admit no rational-function field or exceed the budget."""
-    field = common_domain([g, mu, dpsi, nu])
+    field = common_domain([g, mu, dpsi, nu], trig=True)
     if field.K is None or not field.K.is_FractionField:
         return None
     try:
@@ -237,17 +250,15 @@ def shared_denominators(
 
 def _route(field, g, mu, dpsi, nu, check, cancel):
     core = _Core(field, g, mu, dpsi, nu)
-    K, Fd = core.K, core.K.field
-    n, m, k, zero = core.n, core.m, core.k, core.R.zero
+    Fd, n, k, zero = core.K.field, core.n, core.k, core.R.zero
     gamma, lam, d1, dG = core.gamma, core.lam, core.d1, core.dG
-    Pg, Gr, Ar, PYn, betan, Cn = core.Pg, core.Gr, core.Ar, core.PYn, core.betan, core.Cn
+    Ar, PYn, betan, Cn = core.Ar, core.PYn, core.betan, core.Cn
 
     def frac(num: Poly, den: Poly) -> Any:
-        return _fraction(Fd, num, den, cancel)
+        return _fraction(Fd, num, den, cancel, field.reduce)
 
     def to_sympy(rows: list[list[Any]]) -> sp.Matrix:
-        r, c = len(rows), (len(rows[0]) if rows else 0)
-        return field.to_sympy_matrix(DomainMatrix(rows, (r, c), K))
+        return field.to_matrix(rows)
 
     PYl, Cnl, betal = PYn.to_list(), Cn.to_list(), betan.to_list()
     PY = to_sympy([[frac(gamma * PYl[i][a], d1 * lam[a]) for a in range(k)] for i in range(n)])
@@ -285,19 +296,10 @@ def _route(field, g, mu, dpsi, nu, check, cancel):
         for i in range(n)
     ]
     beta = [[frac(betal[a][j], d1 * lam[a]) for j in range(n)] for a in range(k)]
-    if m:
-        Pn = (Pg * Gr).to_list()
-        P = [[frac(Pn[i][j], d1) for j in range(n)] for i in range(n)]
-        Q = [[frac((d1 if i == j else zero) - Pn[i][j], d1) for j in range(n)] for i in range(n)]
-    else:
-        P = [[Fd.one if i == j else Fd.zero for j in range(n)] for i in range(n)]
-        Q = [[Fd.zero] * n for _ in range(n)]
     Yn = (core.adjG * Ar.transpose()).to_list()
     Y = [[frac(gamma * Yn[i][a], dG * lam[a]) for a in range(k)] for i in range(n)]
 
     objects = {
-        "P": to_sympy(P),
-        "Q": to_sympy(Q),
         "Y": to_sympy(Y),
         "PY": PY,
         "C": C,

@@ -60,6 +60,7 @@ from typing import Any
 import sympy as sp
 
 from symmech.algebra import budget as limits
+from symmech.algebra.budget import BudgetExceeded
 from symmech.declaration.latex import latex_text
 from symmech.impacts.energy_forms import Affine, QuadraticForm, common_domain
 from symmech.impacts.identity import Unsupported, identically_zero
@@ -226,8 +227,8 @@ def carnot_residual(
         return _symbolic(setup)
 
     if _size([proj.g, proj.P, proj.PP, proj.T, matrix, offset, W]) <= limits.CARNOT_FIELD_OPS:
-        formed = symbolic()
-        if formed[0] == 0:
+        formed = _bounded(symbolic)
+        if formed is not None and formed[0] == 0:
             return CarnotResult(
                 theorem, statement, True, "fraction field", Fraction(0), symbolic, formed=formed
             )
@@ -249,6 +250,21 @@ def carnot_residual(
     return CarnotResult(
         theorem, statement, formed[0] == 0, "symbolic", Fraction(0), symbolic, formed=formed
     )
+
+
+def _bounded(symbolic: Callable[[], Formed]) -> Formed | None:
+    """The fraction-field residual within :data:`symmech.algebra.budget.CARNOT_FIELD_SECONDS`
+    (None when over it: the exact evaluation decides instead).  The operation count does
+    not bound the gcds of the field's additions, which grow with its generators (a wall
+    with sin and cos of six arguments has twelve)."""
+    stage = "Carnot residual (fraction field)"
+    try:
+        with limits.time_limit(stage, limits.CARNOT_FIELD_SECONDS, "CARNOT_FIELD_SECONDS"):
+            return symbolic()
+    except BudgetExceeded as exc:
+        if exc.budget != "CARNOT_FIELD_SECONDS":
+            raise
+        return None
 
 
 class _Setup:
@@ -328,7 +344,7 @@ def _symbolic(s: _Setup) -> Formed:
     zero = sp.zeros(n, 1)
     k_loss, k_c = (1 - a) / (1 + a), 2 * a / (1 + a)
     ring = common_domain(
-        [proj.g, proj.P, proj.PP, proj.T, s.matrix, s.offset, s.W], [a, k_loss, k_c]
+        [proj.g, proj.P, proj.PP, proj.T, s.matrix, s.offset, s.W], [a, k_loss, k_c], trig=True
     )
     g, PP, Tt = (ring.matrix(M) for M in (proj.g, proj.PP, proj.T))
     x = Affine.of(ring, sp.Matrix(proj.P), zero)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.algebra import budget as limits
-from symmech.geometry.field import RationalField, common_domain
+from symmech.geometry.field import RationalField, common_domain, field_zero
 
 __all__ = ["Affine", "QuadraticForm", "common_domain"]
 
@@ -89,9 +89,9 @@ class QuadraticForm:
         cancelled (and, with ``simplify``, simplified when small and non-zero, for
         trigonometric or radical relations)."""
         r = self.ring
-        A = r.to_sympy_matrix(self.A)
-        b = r.to_sympy_matrix(self.b)
-        c = r.to_sympy_matrix(self.c)[0, 0]
+        A = r.to_sympy_matrix(r.normal_matrix(self.A))
+        b = r.to_sympy_matrix(r.normal_matrix(self.b))
+        c = r.to_sympy_matrix(r.normal_matrix(self.c))[0, 0]
         n = A.rows
 
         def clean(e: sp.Expr) -> sp.Expr:
@@ -116,6 +116,8 @@ def _clean(e: sp.Expr, simplify: bool) -> sp.Expr:
         return e
     if limits.expanded_terms(e, cap=limits.FIELD_TERMS + 1)[0] > limits.FIELD_TERMS:
         return e
+    if field_zero(e):  # e.g. sqrt(u)^2 written back as u, with sin^2 + cos^2 = 1 in it
+        return sp.S.Zero
     e = sp.cancel(e)
     if (
         simplify

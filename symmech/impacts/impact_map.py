@@ -323,8 +323,13 @@ def derive_impact_map(
     *,
     wall_velocity: Sequence | sp.MatrixBase | None = None,
     simplify: Level = "light",
+    projectors: tuple[sp.MatrixBase, sp.MatrixBase] | None = None,
 ) -> ImpactMap:
     """Derive the impact map of ``wall`` (a ResolvedWall, or its index or name).
+
+    ``projectors``: the scene's (P, Q) of the permanent constraints
+    (:meth:`symmech.Scene.projectors`), so that the impact uses the same objects; built
+    here when not given (and always, unsimplified, with ``simplify="none"``).
 
     ``law`` (default: the wall's) is ``"newton"``, Carnot paper 002:
 
@@ -393,7 +398,8 @@ def derive_impact_map(
             wall_points=on_wall,
         )
 
-    proj = impact_projectors(g, mu, dpsi, nu, level, check=check)
+    permanent = projectors if level != "none" else None
+    proj = impact_projectors(g, mu, dpsi, nu, level, check=check, permanent=permanent)
 
     V: sp.Matrix | None = None
     if wall_velocity is None and rw.velocity is not None:

@@ -106,6 +106,7 @@ def impact_projectors(
     nu: sp.MatrixBase,
     level: Level = "light",
     check: Callable[[sp.Matrix, sp.Matrix], None] | None = None,
+    permanent: tuple[sp.MatrixBase, sp.MatrixBase] | None = None,
 ) -> ImpactProjectors:
     """Build P, Q, Y^A, P(Y^A), C^AB, C_AB, beta^B, QQ, PP, T~, Q~, P~ (Carnot paper 002).
 
@@ -120,21 +121,26 @@ def impact_projectors(
     simplification.tidy` applied to the intermediate results.  ``check(C, PY)``, if given,
     is called before C is inverted (see :func:`symmech.impacts.degeneracy.check_regular`)
     and may raise.
+
+    P and Q are the permanent constraints' projectors, ``permanent`` when given (the
+    scene's, :meth:`symmech.Scene.projectors`), else built here by
+    :func:`symmech.constraints.projectors.projectors` at ``level``: every route below
+    takes them as they are and builds only the impact's own objects.
     """
     g = sp.Matrix(g)
     n = g.rows
     mu = sp.Matrix(mu) if mu.rows else sp.zeros(0, n)
     dpsi = sp.Matrix(dpsi)
     nu = sp.Matrix(nu) if nu.rows else sp.zeros(0, n)
+    P, Q = (sp.Matrix(M) for M in (permanent or permanent_projectors(g, mu, level)))
     if level != "none":
-        field = common_domain([g, mu, dpsi, nu])
+        field = common_domain([g, mu, dpsi, nu], trig=True)
         if field.K is not None and not field.K.is_FractionField:
-            return _in_field(field, g, mu, dpsi, nu, check)
+            return _in_field(field, g, mu, dpsi, nu, P, Q, check)
         routed = adjugate_route(field, g, mu, dpsi, nu, check)
         if routed is not None:
             objects, denominators = routed
-            return _pack(g, mu, dpsi, nu, **objects, denominators=denominators)
-    P, Q = permanent_projectors(g, mu, level)
+            return _pack(g, mu, dpsi, nu, P, Q, **objects, denominators=denominators)
     A = dpsi.col_join(nu)
     Y = solve_spd(g, A.T, level)
     PY = tidy_matrix(P * Y, level)
@@ -188,6 +194,8 @@ def _in_field(
     mu: sp.Matrix,
     dpsi: sp.Matrix,
     nu: sp.Matrix,
+    P: sp.Matrix,
+    Q: sp.Matrix,
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
 ) -> ImpactProjectors:
     """The same construction in exact arithmetic over the rationals (every entry a
@@ -197,13 +205,7 @@ def _in_field(
     G = ring.matrix(g)
     eye = DomainMatrix.eye(n, Kf)
     Ginv = G.inv()
-    if mu.rows:
-        MU = ring.matrix(mu)
-        Z = Ginv * MU.transpose()
-        Qd = Z * (MU * Z).inv() * MU
-    else:
-        Qd = DomainMatrix.zeros((n, n), Kf)
-    Pd = eye - Qd
+    Pd = ring.matrix(P)
     A = ring.matrix(dpsi.col_join(nu))
     Yd = Ginv * A.transpose()
     PYd = Pd * Yd
@@ -224,8 +226,8 @@ def _in_field(
         mu,
         dpsi,
         nu,
-        out(Pd),
-        out(Qd),
+        P,
+        Q,
         out(Yd),
         PY,
         C,
