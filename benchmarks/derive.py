@@ -7,7 +7,7 @@ For n = 2, 4, 8, 16, 32 this prints, measured in one run on this machine:
 * the time for all Christoffel symbols of the second kind as the API returns them by
   default (``scene.christoffel()``: kind 2, ``simplify="light"``; n <= 8), on a fresh
   scene, and the form it returned: "normal" (exact normal form, fraction-free adjugate
-  with a shared determinant, see symmech/geometry/field.py) with its operation count, or
+  with a shared determinant, see symmech/algebra/field.py) with its operation count, or
   "LU" when that normal form exceeds its term budget and the default falls back to the
   exact symbols as built by a symbolic LU solve (operation count not printed: it is not
   the size of a useful closed form);
@@ -26,8 +26,8 @@ import time
 import sympy as sp
 from sympy.physics import mechanics as me
 
+from symmech.algebra.field import field_solve
 from symmech.examples import pendulum_on_cart
-from symmech.geometry.field import field_solve
 
 
 def symmech_route(n: int) -> tuple[float, float, int, tuple[float, str, int | None] | None]:

@@ -17,6 +17,7 @@ from typing import Any
 
 import sympy as sp
 
+from symmech.algebra.simplification import Level, check_level, tidy_matrix
 from symmech.constraints.dynamics import constrained_solution, constraint_rate
 from symmech.constraints.projectors import gradients, gram, projectors, solve_spd
 from symmech.declaration.latex import latex_text
@@ -30,7 +31,6 @@ from symmech.geometry.connection import (
     forcing,
 )
 from symmech.geometry.lie import commutation_coefficients
-from symmech.geometry.simplification import Level, check_level, tidy_matrix
 from symmech.impacts import ImpactMap, derive_impact_map
 from symmech.mechanics import scene_arguments
 
@@ -333,7 +333,7 @@ class Scene:
 
         ``kind=2``: ``[k, i, j] = Gamma^k_ij``; ``kind=1``: ``[k, i, j] = Gamma_kij``
         (slides 000).  Formed for i <= j and mirrored.  ``simplify`` follows
-        :mod:`symmech.geometry.simplification`: ``"light"`` (default) gives exact
+        :mod:`symmech.algebra.simplification`: ``"light"`` (default) gives exact
         normal forms (for kind 2 with one shared determinant, see
         :func:`symmech.geometry.connection.christoffel_second_kind`), falling back to the
         symbols as built when that normal form exceeds its term budget (dense metrics
@@ -469,7 +469,7 @@ class Scene:
         Unconstrained: ``q_ddot = -Gamma(q_dot, q_dot) - g^-1 dV`` (geodesic equation with a
         potential).  Constrained: ``v_dot = M^-1 (f + mu^T lambda)``, which keeps v in D.
         With a frame it is v_dot, the rate of the quasi-velocities.  ``simplify="light"``
-        solves exactly with the strategy of :mod:`symmech.geometry.field` (normal forms
+        solves exactly with the strategy of :mod:`symmech.algebra.field` (normal forms
         with the Pythagorean reduction, a shared determinant for dense trigonometric
         metrics; with constraints one solve of the bordered system
         ``[[M, mu^T], [mu, 0]]``, see :func:`symmech.constraints.dynamics.

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import sympy as sp
 
 from symmech import references
+from symmech.algebra.zero import is_zero
 from symmech.declaration.symbols import coordinates as make_coordinates
 from symmech.errors import SceneError, SymmechError
 from symmech.geometry.distributions import bracket_rank, is_involutive
@@ -41,14 +42,11 @@ class Check:
 
 
 def _zero(expr: object) -> bool:
-    """True if a scalar or matrix expression simplifies to zero."""
+    """True if a scalar or every entry of a matrix is identically zero
+    (:func:`symmech.algebra.zero.is_zero`)."""
     if isinstance(expr, sp.MatrixBase):
         return all(_zero(e) for e in expr)
-    e = sp.sympify(expr)
-    if e == 0:
-        return True
-    e = sp.cancel(sp.together(e))
-    return e == 0 or sp.simplify(e) == 0
+    return is_zero(sp.sympify(expr)) is True
 
 
 def _result(ok: bool, what: str) -> tuple[bool, str]:

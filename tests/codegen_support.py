@@ -9,7 +9,7 @@ Schur-complement code.
 
 Error bounds are first order in the float64 unit roundoff u = 2^-53 and are computed for
 the code actually emitted: the expressions of the code-generation plan (after the
-stable rewrite of :func:`symmech.impacts.stability.stable_coefficient`, which is an
+stable rewrite of :func:`symmech.algebra.stability.stable_coefficient`, which is an
 exact identity, so the plan's expressions have the scene's values: the tests check this
 at 50 digits) and the linear-algebra algorithm of the templates.  Tests accept
 ``2 x bound`` (the second-order terms).

@@ -26,10 +26,10 @@ import symmech as sm
 from symmech import codegen
 from symmech.algebra import budget
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.field import RationalField
+from symmech.algebra.stability import stable_coefficient
 from symmech.codegen.plan import CodegenError
 from symmech.examples import bouncing_ellipse, carnot_3_7, pendulum_on_cart
-from symmech.geometry.field import RationalField
-from symmech.impacts.stability import stable_coefficient
 
 PKG = Path(__file__).resolve().parents[1] / "symmech"
 a, b, c, x, y, z = sp.symbols("a b c x y z", real=True)

@@ -10,7 +10,7 @@ import pytest
 import sympy as sp
 
 import symmech as sm
-from symmech.impacts.stability import stable_coefficient
+from symmech.algebra.stability import stable_coefficient
 
 
 def test_stable_coefficient_keeps_exponentials_whole():

@@ -257,7 +257,7 @@ def test_example_arguments_are_checked(n):
 def test_classify_symmetric_is_scale_free():
     import mpmath
 
-    from symmech.declaration.numeric import classify_symmetric
+    from symmech.algebra.numeric import classify_symmetric
 
     assert classify_symmetric([[1e308, 0.0], [0.0, 1e-308]])[0] == "positive definite"
     assert classify_symmetric([[1.0, 1.0], [1.0, 1.0]])[0] == "singular"
@@ -270,7 +270,7 @@ def test_classify_symmetric_is_scale_free():
 
 
 def test_vanishes_compares_with_the_cancelling_terms():
-    from symmech.declaration.numeric import vanishes
+    from symmech.algebra.numeric import vanishes
 
     pts = [{x: sp.Rational(-3, 7), y: sp.Rational(5, 3)}, {x: sp.Rational(2, 9), y: 1}]
     assert vanishes(sp.sin(x + y) - sp.sin(x) * sp.cos(y) - sp.cos(x) * sp.sin(y), pts)

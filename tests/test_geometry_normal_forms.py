@@ -22,10 +22,10 @@ import sympy as sp
 import symmech as sm
 from symmech.algebra import budget
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.field import RationalField, field_solve
 from symmech.algebra.laplace import adjugate_det
+from symmech.algebra.simplification import normal_form
 from symmech.examples import car, pendulum_on_cart
-from symmech.geometry.field import RationalField, field_solve
-from symmech.geometry.simplification import normal_form
 
 DPS = 40
 TOL = mpmath.mpf(10) ** -30

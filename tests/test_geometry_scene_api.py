@@ -8,8 +8,8 @@ import pytest
 import sympy as sp
 
 import symmech as sm
+from symmech.algebra.simplification import LEVELS, tidy
 from symmech.geometry.lie import commutation_coefficients, lie_bracket
-from symmech.geometry.simplification import LEVELS, tidy
 
 x, y, th = sm.coordinates("x y theta")
 xd, yd, thd = sm.velocities((x, y, th))

@@ -18,10 +18,10 @@ import pytest
 import sympy as sp
 
 import symmech as sm
+from symmech.algebra.sampling import sample_points
 from symmech.declaration.constants import constant_out_of_range
 from symmech.declaration.definiteness import definiteness, lower_bound
 from symmech.declaration.expressions import parse_expression
-from symmech.declaration.sampling import sample_points
 from symmech.declaration.wallpoints import vanishing_gradient
 
 x, y = sm.coordinates("x y")

@@ -1,5 +1,5 @@
 """Cost-bounded derivation (the adjugate route, symmech.impacts.adjugate_projectors) and
-cost-bounded Carnot verification (exact evaluation, symmech.impacts.identity).
+cost-bounded Carnot verification (exact evaluation, symmech.algebra.identity).
 
 Two systems from the audit of issue 3 that used to hang: a 3-DOF wall with four
 trigonometric terms and an impulsive constraint (> 150 s to derive: the Gram inverse in
@@ -25,8 +25,8 @@ from test_impacts_support import kkt_at
 import symmech as sm
 from symmech import examples
 from symmech.algebra import budget
+from symmech.algebra.identity import DegreeBound, Unsupported, identically_zero
 from symmech.impacts import carnot, derive_impact_map
-from symmech.impacts.identity import DegreeBound, Unsupported, identically_zero
 
 M, m, l, I, J, c, R = sp.symbols("M m l I J c R", positive=True)
 alpha = sp.Symbol("alpha", nonnegative=True)
@@ -203,7 +203,7 @@ def test_bounded_cancellation_and_budget_fallback_stay_exact(monkeypatch):
 
 
 # ---------------------------------------------------------------------------------------
-# exact evaluation (symmech.impacts.identity)
+# exact evaluation (symmech.algebra.identity)
 
 
 def test_identity_test_respects_trigonometric_relations_and_detects_non_zero():

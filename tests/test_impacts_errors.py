@@ -83,7 +83,7 @@ def test_impulsive_constraint_dependent_only_on_the_wall():
 
 
 def test_points_on_a_moving_wall_with_an_arbitrary_function_of_time():
-    from symmech.declaration.sampling import sample_points
+    from symmech.algebra.sampling import sample_points
     from symmech.impacts.degeneracy import points_on_wall
 
     f = sp.Function("f")

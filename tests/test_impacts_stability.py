@@ -1,4 +1,4 @@
-"""The stabilising step (symmech.impacts.stability): closed forms that keep their digits in
+"""The stabilising step (symmech.algebra.stability): closed forms that keep their digits in
 float64, checked against mpmath at 50 digits."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ import sympy as sp
 from test_impacts_support import impact_map
 
 import symmech as sm
+from symmech.algebra.stability import stable_coefficient, stable_linear
 from symmech.impacts import derive_impact_map
-from symmech.impacts.stability import stable_coefficient, stable_linear
 
 I, m, R, k, a, b, x, y = sp.symbols("I m R k a b x y", positive=True)
 theta = sp.Symbol("theta", real=True)

@@ -62,6 +62,7 @@ __all__ = [
     "STABLE_ENTRY_OPS",
     "STABLE_OPS",
     "STABLE_TERMS",
+    "ZERO_EXACT_OPS",
     "ZERO_TEST_OPS",
     "BudgetExceeded",
     "checkpoint",
@@ -72,7 +73,7 @@ __all__ = [
     "time_limit",
 ]
 
-# -- geometry: the rational-function field (symmech.geometry.field) -----------------------
+# -- geometry: the rational-function field (symmech.algebra.field) -----------------------
 #: terms, skip: inputs whose expansion (bound of :func:`expanded_terms`) holds more terms
 #: than this are not converted into a polynomial domain (the field declines).
 FIELD_TERMS = 20_000
@@ -86,7 +87,7 @@ FIELD_MINOR_TERMS = 25_000
 #: monomial and integer content.
 FIELD_GCD_TERMS = 400
 
-# -- geometry: the simplification policy (symmech.geometry.simplification) ----------------
+# -- geometry: the simplification policy (symmech.algebra.simplification) ----------------
 #: operations, skip: ``"light"`` normal forms and ``cancel`` of larger expressions.
 LIGHT_SIMPLIFY_OPS = 400
 #: operations, skip: ``sympy.simplify`` of larger expressions (level ``"full"``).
@@ -107,8 +108,10 @@ STABLE_OPS = 600
 STABLE_TERMS = 2_000
 #: operations, skip: ``sympy.simplify`` of an impact-map entry (``simplify="full"``).
 IMPACT_FULL_OPS = 150
-#: operations, skip: symbolic confirmation of a numerically zero expression.
+#: operations, skip: the exact normal-form route of :func:`symmech.algebra.zero.is_zero`.
 ZERO_TEST_OPS = 200
+#: operations, skip: its randomized exact evaluation (larger: sampled evaluation only).
+ZERO_EXACT_OPS = 20_000
 #: operations, skip: singular sets - larger expressions are not factored and larger closed
 #: forms are not scanned for denominators (symmech.impacts.degeneracy).
 SINGULAR_FACTOR_OPS = 400

@@ -46,6 +46,7 @@ from sympy.core.function import AppliedUndef
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.stability import stable_coefficient
 from symmech.codegen.blocks import (
     BATCH_SUFFIX,
     Block,
@@ -56,7 +57,6 @@ from symmech.codegen.blocks import (
 from symmech.codegen.closed_form_budget import closed_form_cost
 from symmech.codegen.kinds import SCENE_BUILDERS, WALL_BUILDERS, BuildContext
 from symmech.declaration.symbols import t as TIME
-from symmech.impacts.stability import stable_coefficient
 
 if TYPE_CHECKING:
     from symmech.scene import Scene
@@ -354,7 +354,7 @@ def _build(
         """Inputs and constants substituted; a velocity-free entry (metric, gradients,
         one-forms, projectors) in stable form: numerator and denominator factored, so a
         difference such as a^2 - b^2 is evaluated as (a - b)(a + b), without cancellation
-        (see :mod:`symmech.impacts.stability`).  Velocity-dependent entries keep their
+        (see :mod:`symmech.algebra.stability`).  Velocity-dependent entries keep their
         structure (the sparse forcing, the stable impact maps)."""
         if e in prepared:  # the metric's entries recur: symmetry, and in every solve
             return prepared[e]

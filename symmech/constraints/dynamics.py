@@ -24,9 +24,9 @@ from collections.abc import Sequence
 
 import sympy as sp
 
+from symmech.algebra.field import common_domain
+from symmech.algebra.simplification import Level, check_level, polish
 from symmech.constraints.projectors import bordered, solve_spd
-from symmech.geometry.field import common_domain
-from symmech.geometry.simplification import Level, check_level, polish
 
 __all__ = [
     "constrained_acceleration",
@@ -101,7 +101,7 @@ def constrained_solution(
     With a simplification level: one exact fraction-free solve of the bordered system
     ``[[M, mu^T], [mu, 0]] [v_dot; -lambda] = [f; -mu_dot v]`` (see
     :func:`~symmech.constraints.projectors.bordered`; entries cancelled against its
-    determinant, in the Pythagorean normal form of :mod:`symmech.geometry.field`), which
+    determinant, in the Pythagorean normal form of :mod:`symmech.algebra.field`), which
     avoids inverting the Gram matrix C whose entries already carry ``det M``.  Otherwise,
     or when that solve declines, :func:`multipliers` and
     :func:`constrained_acceleration` (the formulas of the module docstring).

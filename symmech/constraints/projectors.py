@@ -16,8 +16,8 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symmech.geometry.field import common_domain, field_solve
-from symmech.geometry.simplification import Level, check_level, polish, tidy_matrix
+from symmech.algebra.field import common_domain, field_solve
+from symmech.algebra.simplification import Level, check_level, polish, tidy_matrix
 
 __all__ = ["gradients", "gram", "projectors", "solve_spd"]
 
@@ -26,7 +26,7 @@ def solve_spd(A: sp.MatrixBase, B: sp.MatrixBase, level: Level = "light") -> sp.
     """Solve ``A X = B`` for a symmetric positive definite A.
 
     With a simplification level other than ``"none"`` the solve is exact, by the strategy
-    of :func:`symmech.geometry.field.field_solve` (diagonal blocks divided directly, dense
+    of :func:`symmech.algebra.field.field_solve` (diagonal blocks divided directly, dense
     blocks by a fraction-free adjugate; every entry a cancelled fraction in the
     Pythagorean normal form, ``sin^2 -> 1 - cos^2``), then :func:`polish` at ``"full"``.
     With ``"none"``, or when that solve declines (no exact field, a normal form over its
@@ -94,7 +94,7 @@ def bordered(G: list[list], MU: list[list], zero: object) -> list[list]:
 def _field_projectors(g: sp.MatrixBase, mu: sp.MatrixBase) -> tuple[sp.Matrix, sp.Matrix] | None:
     """(P, Q) computed exactly in the field of the entries of g and mu, every entry a
     cancelled fraction in the Pythagorean normal form (``sin^2 -> 1 - cos^2``, see
-    :mod:`symmech.geometry.field`), or ``None`` when the entries admit no exact field or
+    :mod:`symmech.algebra.field`), or ``None`` when the entries admit no exact field or
     the solves decline.
 
     ``P = (B^{-1})_11 g`` with the bordered matrix ``B = [[g, mu^T], [mu, 0]]`` (see

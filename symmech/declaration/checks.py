@@ -21,6 +21,16 @@ from typing import Any
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech.algebra.numeric import (
+    EvaluationError,
+    classify_symmetric,
+    proven_real,
+    proven_sign,
+    real_values,
+)
+from symmech.algebra.rank import generic_rank
+from symmech.algebra.sampling import atom_key, sample_points
+from symmech.algebra.zero import is_zero
 from symmech.declaration.admissible import NON_SMOOTH, expression_problems
 from symmech.declaration.definiteness import Verdict, definiteness
 from symmech.declaration.kinetic_metric import (
@@ -28,16 +38,6 @@ from symmech.declaration.kinetic_metric import (
     linear_form_row,
     metric_from_kinetic_energy,
 )
-from symmech.declaration.numeric import (
-    EvaluationError,
-    classify_symmetric,
-    proven_real,
-    proven_sign,
-    rank_at,
-    real_values,
-    vanishes,
-)
-from symmech.declaration.sampling import atom_key, sample_points
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.wallpoints import vanishing_gradient
 from symmech.errors import SceneError, UndecidedWarning
@@ -347,7 +347,7 @@ def check_metric(
         (i, j)
         for i in range(n)
         for j in range(i + 1, n)
-        if G[i, j] != G[j, i] and vanishes(G[i, j] - G[j, i], pts) is False
+        if G[i, j] != G[j, i] and is_zero(G[i, j] - G[j, i], pts) is False
     ]
     if asym:
         problems.add(f"{label}: not symmetric, g[i,j] != g[j,i] at (i,j) in {asym}")
@@ -490,13 +490,7 @@ def check_wall_gradient(
 
 
 def _generic_rank(M: sp.Matrix, pts: list[dict]) -> tuple[int | None, str]:
-    ranks, reason = [], ""
-    for point in pts:
-        try:
-            ranks.append(rank_at(M, point))
-        except EvaluationError as exc:
-            reason = reason or f"entry {list(exc.index or ())} {exc.reason}{_at(point, M)}"
-    return (max(ranks) if ranks else None), reason
+    return generic_rank(M, pts, lambda point: _at(point, M))
 
 
 def check_frame(S: sp.Matrix, points: Points, problems: Problems) -> None:

@@ -11,7 +11,7 @@ each sampled point, over every value of the coordinates:
    ``diag(1, r**2)``; a metric singular everywhere was refused before), by
 
    * the kinetic energy: ``T`` a sum of nonnegative terms (``m/2 (x_dot + l cos q
-     q_dot)**2 + ...``, :func:`~symmech.declaration.numeric.proven_sign` with the
+     q_dot)**2 + ...``, :func:`~symmech.algebra.numeric.proven_sign` with the
      velocities real) makes g positive semidefinite at every q;
    * interval arithmetic (:mod:`mpmath.iv`, outward rounding) over the whole range of
      each coordinate (from its assumptions; ``sin`` and ``cos`` in [-1, 1], even powers
@@ -27,13 +27,13 @@ each sampled point, over every value of the coordinates:
 2. **refuted**: a point where g is indefinite, found by the exact roots above or by a
    compass search from each sampled point, minimising a diagonal entry or the smallest
    eigenvalue of g scaled to unit diagonal (``D^-1/2 g D^-1/2``, free of units); the
-   point is confirmed by :func:`~symmech.declaration.numeric.classify_symmetric` at a
+   point is confirmed by :func:`~symmech.algebra.numeric.classify_symmetric` at a
    rational point near it;
 
 3. **undecided** otherwise: the searches found g positive definite everywhere they went,
    but nothing proves it elsewhere.  The caller warns (:class:`~symmech.UndecidedWarning`).
 
-Everything is evaluated in float64 tree walks (:mod:`symmech.declaration.numeric`) and
+Everything is evaluated in float64 tree walks (:mod:`symmech.algebra.numeric`) and
 interval arithmetic; nothing calls ``sympy.simplify``.  The search is bounded by
 :data:`SEARCH_EVALUATIONS` evaluations per sampled point and :data:`SEARCH_WORK` tree nodes
 evaluated per metric.
@@ -52,7 +52,7 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from symmech.declaration.numeric import (
+from symmech.algebra.numeric import (
     EvaluationError,
     classify_symmetric,
     evaluate,

@@ -26,7 +26,7 @@ from fractions import Fraction
 
 import sympy as sp
 
-from symmech.declaration.numeric import vanishes
+from symmech.algebra.zero import is_zero
 
 __all__ = [
     "NotQuadraticError",
@@ -232,7 +232,7 @@ def linear_form_row(
     ``d^2 e / dv^i dv^j`` and the velocity-free part ``e(v = 0)`` vanish identically, and
     some coefficient does not.  "Vanishes identically" is decided exactly where sympy's
     automatic simplification already gives 0, else by
-    :func:`~symmech.declaration.numeric.vanishes` at ``points(expr)``, sample points giving
+    :func:`~symmech.algebra.zero.is_zero` at ``points(expr)``, sample points giving
     values to every symbol of ``expr`` (``sympy.simplify`` is never called: a constraint
     of a few hundred operations can keep it busy for many minutes).  A coefficient written
     with velocities that cancel is returned without them.  Raises
@@ -246,7 +246,7 @@ def linear_form_row(
         if not inside:
             continue
         pts = points(r)
-        if all(vanishes(sp.diff(r, vk), pts) is True for vk in inside):
+        if all(is_zero(sp.diff(r, vk), pts) is True for vk in inside):
             row[j] = r.xreplace(zero)  # written with velocities that cancel
         else:
             nonlinear.append(str(v[j]))
@@ -257,14 +257,14 @@ def linear_form_row(
             " one-forms mu_i(q) q_dot^i",
         )
     pts = points(e)
-    if all(r == 0 or vanishes(r, pts) is True for r in row):
+    if all(is_zero(r, pts) is True for r in row):
         raise NotQuadraticError(
             e,
             f"does not involve any velocity {sorted(map(str, v))}; a holonomic constraint"
             " h(q) = 0 is given by its differential dh (h_dot = 0)",
         )
     offset = e.xreplace(zero)
-    if offset != 0 and vanishes(offset, pts) is not True:
+    if is_zero(offset, pts) is not True:
         raise NotQuadraticError(
             e,
             f"has the velocity-free part {_short(offset)}; constraints must be linear"

@@ -65,6 +65,7 @@ from typing import Any
 
 import sympy as sp
 
+from symmech.algebra.sampling import atom_key
 from symmech.declaration.admissible import NON_SMOOTH
 from symmech.declaration.checks import (
     Field,
@@ -83,7 +84,6 @@ from symmech.declaration.checks import (
 from symmech.declaration.dynamic import dynamic_translation
 from symmech.declaration.expressions import to_expression
 from symmech.declaration.forces import forces_field
-from symmech.declaration.sampling import atom_key
 from symmech.declaration.structure import (
     _coordinate_symbols,
     _explicit_parameters,

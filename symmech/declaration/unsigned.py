@@ -13,9 +13,9 @@ from collections.abc import Sequence
 
 import sympy as sp
 
+from symmech.algebra.numeric import EvaluationError, classify_symmetric, real_values
+from symmech.algebra.sampling import atom_key
 from symmech.declaration.checks import Points, Problems, check_metric
-from symmech.declaration.numeric import EvaluationError, classify_symmetric, real_values
-from symmech.declaration.sampling import atom_key
 from symmech.declaration.symbols import t as TIME
 
 __all__ = ["check_metric_signs"]

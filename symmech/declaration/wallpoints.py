@@ -27,7 +27,7 @@ from collections.abc import Callable, Mapping, Sequence
 import mpmath as mp
 import sympy as sp
 
-from symmech.declaration.numeric import EvaluationError, evaluate_matrix_mp, proven_sign
+from symmech.algebra.numeric import EvaluationError, evaluate_matrix_mp, proven_sign
 
 __all__ = ["GRADIENT_RATIO", "points_on_wall", "vanishing_gradient"]
 

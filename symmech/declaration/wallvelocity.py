@@ -20,8 +20,8 @@ from collections.abc import Callable, Sequence
 
 import sympy as sp
 
+from symmech.algebra.zero import is_zero
 from symmech.declaration.checks import Field, Points, Problems, short
-from symmech.declaration.numeric import vanishes
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.wall import Wall
 
@@ -64,7 +64,7 @@ def check_wall_velocity(
     grad = sp.Matrix([[sp.diff(psi, c) for c in q]])
     row = grad * frame if frame is not None else grad
     normal = sp.expand((row * W)[0, 0] + sp.diff(psi, TIME))
-    if normal == 0 or vanishes(normal, points.for_(normal)):
+    if is_zero(normal, points.for_(normal)):
         return True
     problems.add(
         f"{label}.velocity does not move with the wall: dpsi(W) + psi_t = {short(normal)}"

@@ -19,7 +19,7 @@ nonholonomic basis"; Carnot paper 002, eq. 2):
   coefficients) follow the policy of :func:`_raise_index`: exact normal forms computed
   fraction-free with one shared determinant and the Pythagorean reduction, symbols
   formed for i <= j only in coordinates and mirrored; the lowered ones and the forcing
-  are cheap and follow :func:`~symmech.geometry.simplification.simplify_all`.
+  are cheap and follow :func:`~symmech.algebra.simplification.simplify_all`.
 * Equations of motion in the velocity basis (Kane / Hamel form, slides "Kane's method of
   quasi-velocities"): ``M v_dot = f`` with
   ``f_k = -omega_kij v^i v^j - u_k(V)``; in coordinates ``omega = Gamma`` and
@@ -33,9 +33,9 @@ from collections.abc import Sequence
 
 import sympy as sp
 
+from symmech.algebra.field import field_solve
+from symmech.algebra.simplification import Level, check_level, polish, simplify_all, tidy
 from symmech.geometry.derivatives import Derivative
-from symmech.geometry.field import field_solve
-from symmech.geometry.simplification import Level, check_level, polish, simplify_all, tidy
 
 __all__ = [
     "christoffel_first_kind",
@@ -94,12 +94,12 @@ def _raise_index(
     """``X = g^{-1} F`` for the columns of F (each a list of n lowered components).
 
     Simplification policy of the raised symbols (the "documented policy"; see also
-    :mod:`symmech.geometry.simplification`):
+    :mod:`symmech.algebra.simplification`):
 
     * ``"none"``: a diagonal g is divided directly, otherwise a symbolic LU solve, as built;
     * ``"light"`` (default): a diagonal g is divided directly and each entry put in the
-      normal form of :func:`~symmech.geometry.simplification.normal_form`.  Otherwise the
-      exact solve of :func:`symmech.geometry.field.field_solve`, which chooses its route
+      normal form of :func:`~symmech.algebra.simplification.normal_form`.  Otherwise the
+      exact solve of :func:`symmech.algebra.field.field_solve`, which chooses its route
       by cost: a fraction-free adjugate and determinant formed once, every minor reduced
       by ``sin^2 -> 1 - cos^2`` (where both occur), ``X = (adj g) F / det g`` with the
       determinant shared by all entries and cancelled against each numerator (by a gcd

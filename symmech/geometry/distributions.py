@@ -7,8 +7,8 @@
 Generic rank policy (:data:`GENERIC_RANK_POLICY`): ranks of fields with non-constant
 components are *generic* ranks, the rank at points off a measure-zero set.  Each rank is
 computed twice: symbolically (exact linear algebra on the entries, simplified first when
-``simplify=True``) and numerically (the largest rank, by a 40-digit SVD, over a few
-reproducible random rational sample points, see :mod:`symmech.declaration.sampling`).
+``simplify=True``) and numerically (the largest rank, :mod:`symmech.algebra.rank`, over a few
+reproducible random rational sample points, see :mod:`symmech.algebra.sampling`).
 The numeric rank at a random point equals the generic rank with probability one, whereas
 the symbolic rank is too large when sympy fails to recognise a zero (e.g. an unsimplified
 ``sin^2 + cos^2 - 1``).  So the numeric rank decides when it is available; disagreements
@@ -25,9 +25,10 @@ from typing import Any
 
 import sympy as sp
 
+from symmech.algebra.simplification import Level
 from symmech.errors import SceneError
 from symmech.geometry.lie import Field, _bracket, _coords, _fields, _shaped
-from symmech.geometry.rank import (
+from symmech.geometry.span_rank import (
     GENERIC_RANK_POLICY,
     Point,
     _generic_rank,
@@ -35,7 +36,6 @@ from symmech.geometry.rank import (
     _points_arg,
     _sample,
 )
-from symmech.geometry.simplification import Level
 
 __all__ = [
     "GENERIC_RANK_POLICY",

@@ -25,10 +25,10 @@ from typing import Any, TypeAlias
 
 import sympy as sp
 
+from symmech.algebra.field import common_domain
+from symmech.algebra.simplification import Level, check_level, normal_form, polish
 from symmech.errors import SceneError
-from symmech.geometry.field import common_domain
-from symmech.geometry.rank import _generic_rank, _sample
-from symmech.geometry.simplification import Level, check_level, normal_form, polish
+from symmech.geometry.span_rank import _generic_rank, _sample
 
 __all__ = [
     "Field",
@@ -215,8 +215,8 @@ def _bracket(
 def _tidy_entry(e: sp.Expr, level: Level) -> sp.Expr:
     """Simplify one component: polynomials are expanded (a canonical form), other
     expressions get the exact normal form with the Pythagorean reduction
-    (:func:`~symmech.geometry.simplification.normal_form`, bounded in size), then
-    :func:`~symmech.geometry.simplification.polish` at ``"full"``."""
+    (:func:`~symmech.algebra.simplification.normal_form`, bounded in size), then
+    :func:`~symmech.algebra.simplification.polish` at ``"full"``."""
     if level == "none":
         return e
     e = sp.expand(e)
@@ -257,7 +257,7 @@ def lie_bracket(X: Field, Y: Field, q: Any, *, simplify: Level = "light") -> sp.
             canonical form) whatever the level.  Otherwise ``"none"`` returns the raw
             sum, and other levels expand each component, keep it if it is then a
             polynomial, else put it in the exact normal form of
-            :func:`symmech.geometry.simplification.normal_form` (``sin^2 -> 1 - cos^2``
+            :func:`symmech.algebra.simplification.normal_form` (``sin^2 -> 1 - cos^2``
             where both occur; ``"full"`` then tries a bounded ``sympy.simplify``).
 
     Returns:
@@ -311,13 +311,13 @@ def commutation_coefficients(
     ``c^m_kl = -c^m_lk`` is built in (only k < l is solved).
 
     Simplification policy: with a level other than ``"none"`` the solve is exact, by
-    :meth:`symmech.geometry.field.RationalField.solve` over the field of the entries of S
+    :meth:`symmech.algebra.field.RationalField.solve` over the field of the entries of S
     and the brackets with the Pythagorean reduction (``sin^2 -> 1 - cos^2`` wherever
     both occur), so the coefficients are cancelled fractions with reduced numerators and
     denominators (the rigid body's ``sin^2 psi + cos^2 psi`` comes out as 1), then a
     bounded ``sympy.simplify`` at ``"full"``.  When no exact field exists or the solve
     declines, the LU solution is expanded and put in the bounded normal form of
-    :func:`symmech.geometry.simplification.normal_form`; ``"none"`` keeps the raw LU
+    :func:`symmech.algebra.simplification.normal_form`; ``"none"`` keeps the raw LU
     solution.
 
     Returns:
@@ -373,7 +373,7 @@ def _lu_solve(S: sp.Matrix, B: sp.Matrix, level: Level) -> tuple[sp.Matrix, bool
 
     With a level other than ``"none"``: the exact solve in the field of the entries with
     the Pythagorean reduction (every entry a cancelled fraction of reduced polynomials in
-    the parameters, coordinates, sin and cos; :mod:`symmech.geometry.field`).  Otherwise,
+    the parameters, coordinates, sin and cos; :mod:`symmech.algebra.field`).  Otherwise,
     or when no exact field exists or the solve declines: ``Matrix.LUsolve`` with sympy's
     zero testing, to be simplified by the caller.
     """

@@ -6,19 +6,19 @@
 * :class:`CarnotResult`: the residual of Carnot's theorems 3.2/3.6/3.9/3.11/4.1/4.3.
 * The independent impulse-momentum (KKT) route that cross-checks these maps is a test
   oracle: ``tests/kkt_oracle.py``.
-* :mod:`symmech.impacts.stability`: the stabilising step for float64 evaluation.
+* :mod:`symmech.algebra.stability`: the stabilising step for float64 evaluation.
 * :mod:`symmech.impacts.adjugate_projectors`: the cost-bounded exact route for the projectors
   (adjugates over the polynomial ring, one shared denominator, bounded final gcds).
-* :mod:`symmech.impacts.identity`: exact evaluation at a random point with a degree bound
+* :mod:`symmech.algebra.identity`: exact evaluation at a random point with a degree bound
   (Schwartz-Zippel), how :meth:`ImpactMap.carnot` decides large maps.
 """
 
+from symmech.algebra.stability import stable_coefficient, stable_linear, stable_matrix
 from symmech.impacts.carnot import CarnotResult
 from symmech.impacts.degeneracy import Singularity
 from symmech.impacts.energy_law import EnergyLaw
 from symmech.impacts.impact_map import LAWS, ImpactMap, derive_impact_map
 from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
-from symmech.impacts.stability import stable_coefficient, stable_linear, stable_matrix
 
 __all__ = [
     "LAWS",

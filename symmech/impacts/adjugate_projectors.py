@@ -51,8 +51,8 @@ from sympy.polys.matrices import DomainMatrix
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.field import RationalField, common_domain
 from symmech.errors import ImpactError
-from symmech.geometry.field import RationalField, common_domain
 
 __all__ = [
     "Denominators",

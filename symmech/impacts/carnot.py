@@ -37,12 +37,12 @@ Deciding "the residual is identically zero", by cost (:attr:`CarnotResult.route`
 
 * ``"fraction field"``: when the map is small (at most
   :data:`symmech.algebra.budget.CARNOT_FIELD_OPS` operations in the matrices involved), the
-  residual is formed in the fraction field of the entries (:mod:`symmech.impacts.energy_forms`),
+  residual is formed in the fraction field of the entries (:mod:`symmech.algebra.energy_forms`),
   each velocity coefficient cancelled (small ones also simplified, for trigonometric
   relations): a proof;
 * ``"exact evaluation"``: otherwise the residual, multiplied by ``1 + alpha``, is
   evaluated exactly in rational arithmetic at a random point, with a degree bound
-  (:mod:`symmech.impacts.identity`, Schwartz-Zippel: the probability of a wrong "holds"
+  (:mod:`symmech.algebra.identity`, Schwartz-Zippel: the probability of a wrong "holds"
   is below 1e-13; :attr:`CarnotResult.error_bound` gives the bound).  The symbolic
   residual is formed only on request (:meth:`CarnotResult.symbolic_residual`,
   :attr:`CarnotResult.terms`);
@@ -61,9 +61,10 @@ import sympy as sp
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.energy_forms import Affine, QuadraticForm, common_domain
+from symmech.algebra.identity import Unsupported, identically_zero
+from symmech.algebra.zero import is_zero
 from symmech.declaration.latex import latex_text
-from symmech.impacts.energy_forms import Affine, QuadraticForm, common_domain
-from symmech.impacts.identity import Unsupported, identically_zero
 from symmech.impacts.impact_projectors import ImpactProjectors
 
 __all__ = ["CarnotResult", "carnot_residual"]
@@ -165,17 +166,9 @@ class CarnotResult:
 
 
 def _is_zero_entry(e: sp.Expr) -> bool:
-    """``e`` identically zero: symbolically when small, else by exact evaluation (a
-    non-zero or undecided verdict counts as non-zero: the general theorem then applies)."""
-    e = sp.sympify(e)
-    if e == 0:
-        return True
-    if sp.count_ops(e) <= 200:
-        return sp.simplify(e) == 0
-    try:
-        return identically_zero(lambda value, const: value(e)).zero
-    except (Unsupported, ZeroDivisionError):
-        return False
+    """``e`` identically zero (:func:`symmech.algebra.zero.is_zero`; an undecided verdict
+    counts as non-zero: the general theorem then applies)."""
+    return is_zero(e) is True
 
 
 def _in_F(proj: ImpactProjectors) -> bool:
@@ -270,7 +263,7 @@ def _bounded(symbolic: Callable[[], Formed]) -> Formed | None:
 class _Setup:
     """The data of one Carnot check, with the residual built two ways: symbolically in the
     fraction field (:func:`_symbolic`) and over any scalar arithmetic (:meth:`evaluate`,
-    for :func:`~symmech.impacts.identity.identically_zero`)."""
+    for :func:`~symmech.algebra.identity.identically_zero`)."""
 
     def __init__(self, proj, matrix, offset, W, alpha, velocities, moving, restrict, kind):
         self.proj, self.matrix, self.offset, self.W = proj, matrix, offset, W

@@ -6,7 +6,7 @@ section 3.1: "C != 0 since we are assuming that the 1-forms mu^a and d psi are i
 along N"; section 3.2: the same for ``{mu^a, d psi, nu^B}``).
 
 * :func:`check_regular` refuses walls for which C is singular *identically*: decided
-  symbolically when cheap, else at sampled points (:mod:`symmech.declaration.sampling`);
+  symbolically when cheap, else at sampled points (:mod:`symmech.algebra.sampling`);
   a matrix singular at every sampled point is singular generically.  It also refuses
   walls for which C is singular *on the wall*: impacts happen only where ``psi = 0``, and
   a wall such as ``psi = y`` with the constraint ``y x_dot + y_dot = 0`` has its gradient
@@ -30,11 +30,13 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import mpmath as mp
-import numpy as np
 import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 
 from symmech.algebra import budget as limits
+from symmech.algebra.numeric import EvaluationError
+from symmech.algebra.rank import rank_at
+from symmech.algebra.zero import is_zero
 from symmech.declaration.wallpoints import points_on_wall
 from symmech.errors import ImpactError
 from symmech.impacts.adjugate_projectors import shared_denominators
@@ -71,73 +73,27 @@ def _short(expr: object, limit: int = 70) -> str:
     return s if len(s) <= limit else s[: limit - 3] + "..."
 
 
-def _numeric(M: sp.MatrixBase, point: dict) -> np.ndarray | None:
-    vals = sp.Matrix(M).subs(point).evalf(30)
-    try:
-        A = np.array([[complex(e) for e in row] for row in vals.tolist()], dtype=complex)
-    except (TypeError, ValueError):
-        return None
-    if not np.all(np.isfinite(A)):
-        return None
-    return A.real
-
-
-#: A leading block of C^AB counts as singular at a point when det / prod(diagonal) (its
-#: Hadamard ratio, in [0, 1] for a Gram matrix and invariant under rescaling the
-#: one-forms) is below this; evaluated with 40 digits (exactly at rational points).
+#: ``C^{00} / g(grad psi, grad psi)`` (invariant under rescaling psi, in [0, 1]) below this
+#: at a point of the wall counts as zero there; evaluated with 40 digits.
 HADAMARD_TOLERANCE = 1e-20
 
 
 def _singular_blocks(C: sp.MatrixBase, point: dict) -> list[bool] | None:
-    """For each leading block of the Gram matrix C at ``point``: is it singular?  The
-    test is scale-invariant (a metric like diag(10^6, 10^6, 10^-6) makes the entries of C
-    differ by 10^12 without making it singular); None if C cannot be evaluated."""
-    vals = sp.Matrix(C).xreplace(point)
-    k = vals.rows
-    if all(e.is_Rational for e in vals):
-        out = []
-        for j in range(k):
-            block = vals[: j + 1, : j + 1]
-            diag = [block[i, i] for i in range(j + 1)]
-            out.append(any(d <= 0 for d in diag) or block.det() == 0)
-        return out
+    """For each leading block of the Gram matrix C at ``point``: is it singular (its rank,
+    :func:`symmech.algebra.rank.rank_at`, below its size)?  The rank test scales rows to
+    unit size, so a metric like diag(10^6, 10^6, 10^-6), which makes the entries of C
+    differ by 10^12, does not make it singular; None if C cannot be evaluated."""
+    C = sp.Matrix(C)
     try:
-        with mp.workdps(40):
-            A = mp.matrix([[mp.mpf(sp.N(e, 45)) for e in row] for row in vals.tolist()])
-            out = []
-            for j in range(k):
-                block = A[: j + 1, : j + 1]
-                diag = [block[i, i] for i in range(j + 1)]
-                if any(d <= 0 for d in diag):
-                    out.append(True)
-                    continue
-                ratio = mp.det(block) / mp.fprod(diag)
-                out.append(bool(abs(ratio) < HADAMARD_TOLERANCE))
-            return out
-    except (TypeError, ValueError, ZeroDivisionError):
+        return [rank_at(C[: j + 1, : j + 1], point) < j + 1 for j in range(C.rows)]
+    except EvaluationError:
         return None
 
 
 def _identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
-    """Zero at every sampled point (a cheap numeric test first), confirmed symbolically
-    when the expression is small; otherwise the sampled verdict stands."""
-    expr = sp.sympify(expr)
-    if expr == 0:
-        return True
-    exact = [expr.xreplace(p) for p in points]
-    if any(e.is_Rational and e != 0 for e in exact):
-        return False  # exactly non-zero at a rational point
-    values = [_numeric(sp.Matrix([[expr]]), p) for p in points]
-    finite = [v for v in values if v is not None]
-    if any(abs(v[0, 0]) >= 1e-20 for v in finite):
-        return False
-    if sp.count_ops(expr) <= _SYMBOLIC_OPS:
-        s = sp.simplify(expr)
-        if s == 0:
-            return True
-        if s.is_number:
-            return False
-    return bool(finite)
+    """:func:`symmech.algebra.zero.is_zero` (sampled at ``points`` when it comes to that);
+    one that cannot be evaluated counts as not zero."""
+    return is_zero(expr, points) is True
 
 
 def _wall_gradient_ratio(

@@ -25,7 +25,7 @@ Text 001 takes the negative root for ``x_dot`` because its disk lies on the side
 
 The map is not linear in v- (square root), so it has no ``matrix``/``offset``.
 
-Stable form of the square root (see :mod:`symmech.impacts.stability`).  With
+Stable form of the square root (see :mod:`symmech.algebra.stability`).  With
 ``b = beta x`` and ``g(QQ x, QQ x) = b^T K b``, order the indices as (1, ..., l, 0) and
 factor ``C = L D L^T`` (L unit lower triangular).  Then ``y = L^{-1} b`` gives
 ``b^T K b = sum_i y_i^2 / D_i`` and ``C_00 = 1/D_0`` (the last pivot is the Schur
@@ -41,9 +41,9 @@ from dataclasses import dataclass
 
 import sympy as sp
 
-from symmech.geometry.simplification import Level, tidy_matrix
+from symmech.algebra.simplification import Level, tidy_matrix
+from symmech.algebra.stability import stable_coefficient
 from symmech.impacts.impact_projectors import ImpactProjectors
-from symmech.impacts.stability import stable_coefficient
 
 __all__ = ["EnergyLaw", "energy_law"]
 
@@ -78,7 +78,7 @@ def energy_law(
 
     Text 001, section 3.2 (generalised with W for moving walls and alpha for an energetic
     restitution; see the module docstring).  With ``stable=True`` every coefficient goes
-    through :func:`symmech.impacts.stability.stable_coefficient` (``state``: the
+    through :func:`symmech.algebra.stability.stable_coefficient` (``state``: the
     coordinates and time).
     """
     n = proj.g.rows

@@ -27,11 +27,14 @@ from typing import TYPE_CHECKING, Literal
 import sympy as sp
 
 from symmech.algebra import budget as limits
+from symmech.algebra.energy_forms import Affine, QuadraticForm, common_domain
+from symmech.algebra.sampling import sample_points
+from symmech.algebra.simplification import Level
+from symmech.algebra.stability import stable_coefficient, stable_matrix
+from symmech.algebra.zero import is_zero
 from symmech.declaration.latex import latex_text
-from symmech.declaration.sampling import sample_points
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import ImpactError
-from symmech.geometry.simplification import Level
 from symmech.impacts.carnot import CarnotResult, carnot_residual
 from symmech.impacts.degeneracy import (
     Singularity,
@@ -39,11 +42,9 @@ from symmech.impacts.degeneracy import (
     impact_singularities,
     points_on_wall,
 )
-from symmech.impacts.energy_forms import Affine, QuadraticForm, common_domain
 from symmech.impacts.energy_law import EnergyLaw, energy_law
 from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
 from symmech.impacts.newton import newton_map
-from symmech.impacts.stability import stable_coefficient, stable_matrix
 
 if TYPE_CHECKING:
     from symmech.declaration.spec import Declaration, ResolvedWall
@@ -300,20 +301,9 @@ def _with_undefined(points: Sequence[dict], psi: sp.Expr) -> list[dict]:
 
 
 def _is_identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
-    """Zero at every sampled point (30 digits); a single non-zero value decides at once,
-    so the symbolic confirmation (``simplify``, small expressions only) runs only for
-    expressions that vanish at every point."""
-    expr = sp.sympify(expr)
-    if expr == 0:
-        return True
-    for point in points:
-        value = sp.N(expr.subs(point), 30)
-        if not value.is_number or abs(complex(value)) > 1e-20:
-            return False
-    if sp.count_ops(expr) <= limits.ZERO_TEST_OPS:
-        simple = sp.simplify(expr)
-        return simple == 0 or not simple.is_number
-    return True
+    """:func:`symmech.algebra.zero.is_zero` (sampled at ``points`` when it comes to that);
+    an expression that cannot be evaluated counts as not zero."""
+    return is_zero(expr, points) is True
 
 
 def derive_impact_map(
@@ -348,7 +338,7 @@ def derive_impact_map(
 
     ``simplify``: ``"none"`` returns the expressions as the projector algebra builds them;
     ``"light"`` (default) applies the stabilising step of
-    :mod:`symmech.impacts.stability` (cancel + factor per velocity coefficient);
+    :mod:`symmech.algebra.stability` (cancel + factor per velocity coefficient);
     ``"full"`` runs :func:`sympy.simplify` on each coefficient first.
 
     Raises :class:`~symmech.ImpactError` when the wall gradient lies in the span of the

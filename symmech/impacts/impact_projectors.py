@@ -34,11 +34,11 @@ import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 from sympy.polys.matrices import DomainMatrix
 
+from symmech.algebra.energy_forms import common_domain
+from symmech.algebra.simplification import Level, tidy, tidy_matrix
 from symmech.constraints.projectors import projectors as permanent_projectors
 from symmech.constraints.projectors import solve_spd
-from symmech.geometry.simplification import Level, tidy, tidy_matrix
 from symmech.impacts.adjugate_projectors import Denominators, adjugate_route
-from symmech.impacts.energy_forms import common_domain
 
 __all__ = ["ImpactProjectors", "impact_projectors"]
 
@@ -111,7 +111,7 @@ def impact_projectors(
     """Build P, Q, Y^A, P(Y^A), C^AB, C_AB, beta^B, QQ, PP, T~, Q~, P~ (Carnot paper 002).
 
     Section 2.2 (P, Q), eq. 7 (Q~, P~), section 3.2 and Prop. 3.4 (QQ, PP, T~).  ``level``
-    is the simplification level of :mod:`symmech.geometry.simplification`.  With a level
+    is the simplification level of :mod:`symmech.algebra.simplification`.  With a level
     other than ``"none"`` the algebra is exact: over the rationals when every entry is a
     number (:func:`_in_field`), else by the adjugate route of
     :mod:`symmech.impacts.adjugate_projectors` (polynomial arithmetic, one shared denominator per

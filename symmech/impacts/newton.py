@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import sympy as sp
 
-from symmech.geometry.simplification import Level, tidy_matrix
+from symmech.algebra.simplification import Level, tidy_matrix
 from symmech.impacts.impact_projectors import ImpactProjectors
 
 __all__ = ["newton_map", "wall_velocity", "wall_velocity_components"]

@@ -41,8 +41,9 @@ from typing import Any
 
 import sympy as sp
 
+from symmech.algebra.rank import rank_at
+from symmech.algebra.zero import is_zero
 from symmech.declaration.checks import Points
-from symmech.declaration.numeric import rank_at, vanishes
 from symmech.errors import SceneError
 
 __all__ = ["scene_arguments"]
@@ -254,7 +255,7 @@ def _metric(model: _Model) -> sp.Matrix:
             for r in range(n):
                 for s in range(r, n):
                     M[r, s] += _dot(w[r], Iw[s])
-    from symmech.geometry.simplification import normal_form
+    from symmech.algebra.simplification import normal_form
 
     for r in range(n):
         for s in range(r, n):
@@ -336,12 +337,12 @@ def _loads(model: _Model) -> tuple[sp.Expr, list[sp.Expr]]:
 
 
 def _identically_zero(exprs: Sequence[sp.Expr]) -> bool:
-    """Whether every expression vanishes identically, judged as the declaration judges it
-    (:func:`~symmech.declaration.numeric.vanishes`: exact inputs at the sample points of
-    :class:`~symmech.declaration.checks.Points`, which give dynamic symbols and their
-    derivatives values of their own); one that cannot be evaluated counts as not zero."""
+    """Whether every expression vanishes identically (:func:`symmech.algebra.zero.is_zero`,
+    sampled at the points of :class:`~symmech.declaration.checks.Points`, which give
+    dynamic symbols and their derivatives values of their own); one that cannot be
+    evaluated counts as not zero."""
     points = Points([])
-    return all(e == 0 or vanishes(e, points.for_(e)) is True for e in exprs)
+    return all(is_zero(e, points.for_(e)) is True for e in exprs)
 
 
 def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: _Model) -> bool:

@@ -22,7 +22,7 @@ The stabilising step implemented here is:
    and is never negative in floating point.
 
 Expressions above :data:`symmech.algebra.budget.STABLE_OPS` operations are left as they are (the
-cost of ``factor`` grows quickly); this mirrors :mod:`symmech.geometry.simplification`.
+cost of ``factor`` grows quickly); this mirrors :mod:`symmech.algebra.simplification`.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ and large systems never pay for a full ``sympy.simplify``:
     Exact rational normal forms.  Quantities obtained by a linear solve (inverses,
     Christoffel symbols of the second kind, connection coefficients, accelerations,
     multipliers, projectors, commutation coefficients) come out of the exact solve of
-    :mod:`symmech.geometry.field`: every entry a cancelled fraction whose numerator and
+    :mod:`symmech.algebra.field`: every entry a cancelled fraction whose numerator and
     denominator are in the *Pythagorean normal form* (``sin(a)^2`` replaced by
     ``1 - cos(a)^2`` wherever both ``sin(a)`` and ``cos(a)`` occur; canonical for
     polynomials in sin and cos), with a shared determinant; the solve chooses its route
@@ -39,8 +39,8 @@ from typing import Literal
 import sympy as sp
 
 from symmech.algebra import budget as limits
+from symmech.algebra.field import RationalField
 from symmech.errors import SceneError
-from symmech.geometry.field import RationalField
 
 __all__ = [
     "LEVELS",
@@ -89,7 +89,7 @@ def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
 
     ``expr`` is read in the fraction field of its building blocks (parameters,
     coordinates, sin/cos and other functions as generators; see
-    :mod:`symmech.geometry.field`), its numerator and denominator are reduced modulo
+    :mod:`symmech.algebra.field`), its numerator and denominator are reduced modulo
     ``sin(a)^2 + cos(a)^2 - 1`` and cancelled, and common factors are pulled out:
 
     >>> x, m = sp.symbols("x m")

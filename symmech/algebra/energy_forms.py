@@ -7,7 +7,7 @@ seconds for Example 3.13).  Here every coefficient matrix is converted once into
 sympy polynomial domain (the fraction field ``QQ(k, r, alpha, sin(theta), ...)``, built by
 :func:`sympy.polys.constructor.construct_domain` after replacing functions and radicals
 by dummy generators), where sums and products are canonical, so "is this identically
-zero" is exact and cheap (the field itself lives in :mod:`symmech.geometry.field`).
+zero" is exact and cheap (the field itself lives in :mod:`symmech.algebra.field`).
 Relations between generators (``sin^2 + cos^2 = 1``,
 ``sqrt(u)^2 = u``) are not known to the field, so a non-zero result is passed through
 :func:`sympy.cancel` / :func:`sympy.simplify` before it is reported.
@@ -19,7 +19,7 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.algebra import budget as limits
-from symmech.geometry.field import RationalField, common_domain, field_zero
+from symmech.algebra.field import RationalField, common_domain, field_zero
 
 __all__ = ["Affine", "QuadraticForm", "common_domain"]
 

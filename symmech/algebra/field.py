@@ -56,6 +56,7 @@ import sympy as sp
 from sympy.core.mul import _keep_coeff
 from sympy.polys.constructor import construct_domain
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import CoercionFailed
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
@@ -483,7 +484,10 @@ def field_zero(e: sp.Expr) -> bool:
     field = RationalField([e], trig=True)
     if not field.exact:
         return False
-    return not field.element(e)
+    try:
+        return not field.element(e)
+    except (CoercionFailed, ValueError):  # a radical's base written two ways: no decision
+        return False
 
 
 def field_solve(A: sp.MatrixBase, B: sp.MatrixBase) -> sp.Matrix | None:

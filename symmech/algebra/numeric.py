@@ -12,7 +12,6 @@ module walks the tree once, memoising shared subtrees:
   and bounded, unlike ``sympy.simplify``);
 * :func:`classify_symmetric` tells positive definite / singular / indefinite, after
   scaling the matrix to unit diagonal so that neither huge nor tiny entries overflow;
-  :func:`rank_at` gives a numerical rank the same way;
 * :func:`proven_sign` proves an expression positive from its structure alone (sums and
   products of positive terms, ``exp`` of a real argument), without evaluating anything:
   sympy's ``is_positive`` may evaluate numerically, and on ``exp(exp(exp(1000)))`` it
@@ -44,7 +43,6 @@ __all__ = [
     "evaluate_matrix_mp",
     "proven_real",
     "proven_sign",
-    "rank_at",
     "real_values",
     "vanishes",
 ]
@@ -427,19 +425,6 @@ def real_values(M: sp.MatrixBase, point: Mapping) -> tuple[list[list], bool]:
     scale = max((abs(x) for r in rows for x in r), default=mpmath.mpf(0))
     imag = max((abs(x.imag) for r in rows for x in r), default=mpmath.mpf(0))
     return [[x.real for x in r] for r in rows], imag > mpmath.mpf(10) ** -12 * scale
-
-
-def rank_at(M: sp.MatrixBase, point: Mapping) -> int:
-    """Numerical rank of M at point, each row scaled to unit size first (rank is invariant
-    under that, and the tolerance 1e-10 is then independent of units); raises
-    :class:`EvaluationError`."""
-    rows, _ = real_values(M, point)
-    A = np.zeros((M.rows, M.cols))
-    for i, r in enumerate(rows):
-        big = max((abs(x) for x in r), default=0)
-        if big:
-            A[i] = [float(mpmath.mpf(x) / big) for x in r]
-    return int(np.linalg.matrix_rank(A, tol=1e-10))
 
 
 # -- signs proven from the structure -------------------------------------------------------
