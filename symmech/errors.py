@@ -8,6 +8,7 @@ All inherit from :class:`SymmechError`; those caused by bad input are also
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import dataclass
 
 __all__ = [
     "ExpressionError",
@@ -30,17 +31,50 @@ class ExpressionError(SymmechError, ValueError):
     """
 
 
+@dataclass(frozen=True)
+class Problem:
+    """One problem of a declaration.
+
+    ``message`` is the full text (it names the object and the reason); ``field`` the input
+    it is about, as a path into the declaration (``"metric"``, ``"constraints[1]"``,
+    ``"walls[0].psi"``, ``"walls[0].impulsive_constraints[1]"``), None when it is about
+    the scene as a whole; ``label`` how the message names that field when it differs from
+    the path (``"walls[0] ('floor').psi"``).  A scene file locates the problem by looking
+    its field up, and shows :attr:`reason`.
+    """
+
+    message: str
+    field: str | None = None
+    label: str | None = None
+
+    def __str__(self) -> str:
+        return self.message
+
+    @property
+    def reason(self) -> str:
+        """The message without its leading ``label:`` (the whole message when it does not
+        start that way: ``walls[0].psi = x does not ...`` reads better whole)."""
+        label = self.label or self.field
+        if label and self.message.startswith(label + ":"):
+            return self.message[len(label) + 1 :].strip()
+        return self.message
+
+
 class SceneError(SymmechError, ValueError):
     """A scene declaration is invalid.
 
     ``problems`` lists every problem found (validation collects them all before raising);
     the message holds one line per problem, each naming the object and the reason.
+    ``records`` holds the same problems as :class:`Problem` records (with their field).
     """
 
-    def __init__(self, problems: Iterable[str] | str):
-        if isinstance(problems, str):
+    def __init__(self, problems: Iterable[str | Problem] | str | Problem):
+        if isinstance(problems, str | Problem):
             problems = [problems]
-        self.problems: list[str] = list(problems)
+        self.records: list[Problem] = [
+            p if isinstance(p, Problem) else Problem(str(p)) for p in problems
+        ]
+        self.problems: list[str] = [p.message for p in self.records]
         if len(self.problems) == 1:
             message = self.problems[0]
         else:

@@ -228,3 +228,30 @@ def test_example_arguments_are_symmech_errors():
 
     with pytest.raises(sm.SceneError, match="pendulum_on_cart: n"):
         pendulum_on_cart(0)
+
+
+def test_problems_name_their_field_as_a_path_not_in_prose():
+    """Every problem of a declaration carries the field it is about (a path the scene-file
+    reader looks up), and the label its message uses; the message itself is unchanged."""
+    x, y = sm.coordinates("x y")
+    xd, yd = sm.velocities((x, y))
+    m = sp.Symbol("m", positive=True)
+    wall = sm.Wall(y + x**0, impulsive_constraints=[xd * yd], name="floor")
+    with pytest.raises(sm.SceneError) as info:
+        sm.Scene(
+            (x, y),
+            metric=sp.diag(m, -m),
+            constraints=[xd + yd, 2 * xd + 2 * yd],
+            forces=[0, "q + 1"],
+            walls=[wall],
+        )
+    records = {r.field: r for r in info.value.records}
+    assert [r.message for r in info.value.records] == info.value.problems
+    assert "metric" in records and records["metric"].message.startswith("metric")
+    assert "forces[1]" in records
+    nu = records["walls[0].impulsive_constraints[0]"]
+    assert nu.label == "walls[0] ('floor').impulsive_constraints[0]"
+    assert nu.message.startswith(nu.label) and not nu.reason.startswith("walls")
+    with pytest.raises(sm.SceneError) as info:
+        sm.Scene((x, y), metric=sp.eye(2) * m, constraints=[xd + yd, 2 * xd + 2 * yd])
+    assert [r.field for r in info.value.records] == ["constraints"]

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import itertools
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,7 +41,7 @@ from symmech.declaration.kinetic_metric import (
 )
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.wallpoints import vanishing_gradient
-from symmech.errors import SceneError, UndecidedWarning
+from symmech.errors import Problem, SceneError, UndecidedWarning
 
 __all__ = [
     "Field",
@@ -139,11 +140,26 @@ def _at(point: Mapping, about: sp.Basic | sp.MatrixBase) -> str:
 
 
 class Problems:
+    """The problems of one declaration, each recorded with the field it is about: the
+    field of the innermost :meth:`about` block around the check that adds it."""
+
     def __init__(self) -> None:
-        self.items: list[str] = []
+        self.items: list[Problem] = []
+        self._about: list[tuple[str | None, str | None]] = [(None, None)]
 
     def add(self, message: str) -> None:
-        self.items.append(message)
+        field, label = self._about[-1]
+        self.items.append(Problem(message, field, label))
+
+    @contextmanager
+    def about(self, field: str, label: str | None = None) -> Iterator[None]:
+        """Problems added inside the block are about ``field`` (a path into the
+        declaration), named ``label`` in their messages (default: the path)."""
+        self._about.append((field, label))
+        try:
+            yield
+        finally:
+            self._about.pop()
 
     def raise_if_any(self) -> None:
         if self.items:
@@ -159,6 +175,11 @@ class Field:
     allowed: frozenset  # symbols it may contain besides the parameters
     in_velocities: bool = False  # written in the velocities (T, a constraint expression)
     ok: bool = True  # no problem with its symbols: its properties can be checked
+    key: str | None = None  # its path in the declaration when not the label ("walls[0].psi")
+
+    @property
+    def path(self) -> str:
+        return self.key or self.label
 
     @property
     def symbols(self) -> set[sp.Symbol]:

@@ -64,7 +64,10 @@ def forces_field(
             " velocity of the basis (0 where nothing is applied)"
         )
         return None
-    out = [expr(e, f"forces[{k}]") for k, e in enumerate(entries)]
+    out = []
+    for k, e in enumerate(entries):
+        with problems.about(f"forces[{k}]"):
+            out.append(expr(e, f"forces[{k}]"))
     if any(e is None for e in out):
         return None
     return Field("forces", sp.Matrix(n, 1, out), allowed, True)

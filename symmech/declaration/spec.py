@@ -306,129 +306,172 @@ def declare(
     fields: list[Field] = []
     S = G = T = None
     frame_field = metric_field = None
+    about = problems.about
     if frame is not None:
-        S = matrix(frame, "frame")
+        with about("frame"):
+            S = matrix(frame, "frame")
         if S is not None:
             fields.append(frame_field := Field("frame", S, q_set))
     if (metric is None) == (kinetic_energy is None):
-        problems.add("metric: give exactly one of 'metric' and 'kinetic_energy'")
+        with about("metric"):
+            problems.add("metric: give exactly one of 'metric' and 'kinetic_energy'")
     elif metric is not None:
-        G = matrix(metric, "metric")
+        with about("metric"):
+            G = matrix(metric, "metric")
         if G is not None:
             fields.append(metric_field := Field("metric", G, q_set))
     else:
-        T = expr(kinetic_energy, "kinetic_energy")
+        with about("kinetic_energy"):
+            T = expr(kinetic_energy, "kinetic_energy")
         if T is not None:
             fields.append(metric_field := Field("kinetic_energy", T, q_set | v_set, True))
-    V = expr(potential if potential is not None else 0, "potential")
+    with about("potential"):
+        V = expr(potential if potential is not None else 0, "potential")
     potential_field = None
     if V is not None:
         fields.append(potential_field := Field("potential", V, q_set | t_set))
-    force_field = forces_field(forces, n, q_set | v_set | t_set, expr, problems)
+    with about("forces"):
+        force_field = forces_field(forces, n, q_set | v_set | t_set, expr, problems)
     if force_field is not None:
         fields.append(force_field)
-    constraint_fields = [
-        _velocity_form_field(c, f"constraints[{a}]", n, q_set, v_set, expr, problems)
-        for a, c in enumerate(constraint_items)
-    ]
+    constraint_fields = []
+    for a, c in enumerate(constraint_items):
+        with about(f"constraints[{a}]"):
+            constraint_fields.append(
+                _velocity_form_field(c, f"constraints[{a}]", n, q_set, v_set, expr, problems)
+            )
     fields += [f for f in constraint_fields if f is not None]
     wall_fields = []
     for k, w in enumerate(wall_list):
-        label = f"walls[{k}]" + (f" ({w.name!r})" if isinstance(w, Wall) and w.name else "")
+        key = f"walls[{k}]"
+        label = key + (f" ({w.name!r})" if isinstance(w, Wall) and w.name else "")
         if not isinstance(w, Wall):
-            problems.add(f"{label}: expected a symmech.Wall, got {type(w).__name__}")
+            with about(key, label):
+                problems.add(f"{label}: expected a symmech.Wall, got {type(w).__name__}")
             continue
-        psi = expr(w.psi, f"{label}.psi")
-        psi_field = Field(f"{label}.psi", psi, q_set | t_set) if psi is not None else None
-        nu_fields = [
-            _velocity_form_field(
-                c, f"{label}.impulsive_constraints[{A}]", n, q_set | t_set, v_set, expr, problems
+        with about(f"{key}.psi", f"{label}.psi"):
+            psi = expr(w.psi, f"{label}.psi")
+        psi_field = (
+            Field(f"{label}.psi", psi, q_set | t_set, key=f"{key}.psi") if psi is not None else None
+        )
+        nu_fields = []
+        for A, c in enumerate(w.impulsive_constraints):
+            nu_label, nu_key = (
+                f"{label}.impulsive_constraints[{A}]",
+                f"{key}.impulsive_constraints[{A}]",
             )
-            for A, c in enumerate(w.impulsive_constraints)
-        ]
-        alpha = Field(f"{label}.restitution", sp.sympify(w.restitution), frozenset())
-        w_field = wall_velocity_field(w, label, n, q_set | t_set, expr, problems)
-        wall_fields.append((k, label, w, psi_field, nu_fields, w_field))
+            with about(nu_key, nu_label):
+                f = _velocity_form_field(c, nu_label, n, q_set | t_set, v_set, expr, problems)
+            if f is not None:
+                f.key = nu_key
+            nu_fields.append(f)
+        alpha = Field(
+            f"{label}.restitution",
+            sp.sympify(w.restitution),
+            frozenset(),
+            key=f"{key}.restitution",
+        )
+        with about(f"{key}.velocity", f"{label}.velocity"):
+            w_field = wall_velocity_field(w, label, n, q_set | t_set, expr, problems)
+        if w_field is not None:
+            w_field.key = f"{key}.velocity"
+        wall_fields.append((key, label, w, psi_field, nu_fields, w_field))
         fields += [f for f in (psi_field, *nu_fields, alpha, w_field) if f is not None]
     names = [w.name for w in wall_list if isinstance(w, Wall) and w.name]
     dup = sorted({x for x in names if names.count(x) > 1})
     if dup:
-        problems.add(f"walls: names {dup} are used by more than one wall")
+        with about("walls"):
+            problems.add(f"walls: names {dup} are used by more than one wall")
 
     # -- stage 2: symbols, field by field ----------------------------------------------------
     rules = SymbolRules(q, qd, v, has_frame, reserved, explicit)
     for f in fields:
-        rules.check(f, problems)
-    params = explicit if explicit is not None else rules.default_parameters(problems)
+        with about(f.path, f.label):
+            rules.check(f, problems)
+    with about("parameters"):
+        params = explicit if explicit is not None else rules.default_parameters(problems)
 
     # -- stage 3: properties -------------------------------------------------------------------
     points = Points([*q, *params, TIME])
     if frame_field is not None and frame_field.ok:
-        check_frame(S, points, problems)
+        with about("frame"):
+            check_frame(S, points, problems)
     assumed: tuple[sp.Symbol, ...] | None = None
     if metric_field is not None and metric_field.ok and G is not None:
-        assumed = check_metric_signs(G, "metric", points, problems, q, params)
+        with about("metric"):
+            assumed = check_metric_signs(G, "metric", points, problems, q, params)
     elif metric_field is not None and metric_field.ok and T is not None and basis_ok:
-        G = metric_of_kinetic_energy(T, v, q, problems)
-        if G is not None:
-            label = "kinetic_energy (its metric, the Hessian of T)"
-            assumed = check_metric_signs(G, label, points, problems, q, params, T)
+        with about("kinetic_energy"):
+            G = metric_of_kinetic_energy(T, v, q, problems)
+            if G is not None:
+                label = "kinetic_energy (its metric, the Hessian of T)"
+                assumed = check_metric_signs(G, label, points, problems, q, params, T)
 
     if potential_field is not None and potential_field.ok:
-        check_real(V, "potential", points, problems)
+        with about("potential"):
+            check_real(V, "potential", points, problems)
     F = sp.zeros(n, 1)
     if force_field is not None and force_field.ok:
         F = force_field.value
         for k, e in enumerate(F):
-            check_real(e, f"forces[{k}]", points, problems)
+            with about(f"forces[{k}]"):
+                check_real(e, f"forces[{k}]", points, problems)
 
-    rows = [
-        constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
-        for f in constraint_fields
-    ]
+    rows = []
+    for f in constraint_fields:
+        if f is not None and f.ok and basis_ok:
+            with about(f.path, f.label):
+                rows.append(constraint_row(f, v, points, problems))
+        else:
+            rows.append(None)
     m = len(constraint_items)
     mu = sp.zeros(0, n)
-    if m >= n:
-        problems.add(
-            f"constraints: {m} constraints for {n} coordinates leave no admissible motion;"
-            " a scene needs fewer constraints than coordinates"
-        )
-    if m and all(r is not None for r in rows):
-        mu = sp.Matrix(rows)
-        if m < n:
-            check_independent(mu, points, "constraints", problems)
+    with about("constraints"):
+        if m >= n:
+            problems.add(
+                f"constraints: {m} constraints for {n} coordinates leave no admissible motion;"
+                " a scene needs fewer constraints than coordinates"
+            )
+        if m and all(r is not None for r in rows):
+            mu = sp.Matrix(rows)
+            if m < n:
+                check_independent(mu, points, "constraints", problems)
 
     resolved: list[tuple[Wall, sp.Expr, sp.Matrix, sp.Matrix | None]] = []
-    for _k, label, w, psi_field, nu_fields, w_field in wall_fields:
-        if psi_field is not None and psi_field.ok and not (psi_field.value.free_symbols & q_set):
-            problems.add(
-                f"{label}.psi = {short(psi_field.value)} does not depend on the coordinates"
-                f" {list(q)}"
-            )
-        elif (
-            psi_field is not None
-            and psi_field.ok
-            and check_real(psi_field.value, f"{label}.psi", points, problems)
-        ):
-            check_wall_gradient(psi_field.value, f"{label}.psi", q, points, problems)
-        nu_rows = [
-            constraint_row(f, v, points, problems) if f is not None and f.ok and basis_ok else None
-            for f in nu_fields
-        ]
+    for key, label, w, psi_field, nu_fields, w_field in wall_fields:
+        with about(f"{key}.psi", f"{label}.psi"):
+            psi_value = psi_field.value if psi_field is not None and psi_field.ok else None
+            if psi_value is not None and not (psi_value.free_symbols & q_set):
+                problems.add(
+                    f"{label}.psi = {short(psi_value)} does not depend on the coordinates {list(q)}"
+                )
+            elif psi_value is not None and check_real(psi_value, f"{label}.psi", points, problems):
+                check_wall_gradient(psi_value, f"{label}.psi", q, points, problems)
+        nu_rows = []
+        for f in nu_fields:
+            if f is not None and f.ok and basis_ok:
+                with about(f.path, f.label):
+                    nu_rows.append(constraint_row(f, v, points, problems))
+            else:
+                nu_rows.append(None)
         if psi_field is None or any(r is None for r in nu_rows):
             continue
         nu = sp.Matrix(nu_rows) if nu_rows else sp.zeros(0, n)
         if nu.rows and mu.rows == m:
-            check_independent(
-                mu.col_join(nu),
-                points,
-                f"{label}.impulsive_constraints (with the permanent constraints)",
-                problems,
-            )
+            with about(f"{key}.impulsive_constraints", f"{label}.impulsive_constraints"):
+                check_independent(
+                    mu.col_join(nu),
+                    points,
+                    f"{label}.impulsive_constraints (with the permanent constraints)",
+                    problems,
+                )
         W = None
         if w_field is not None and w_field.ok and psi_field.ok:
-            if check_wall_velocity(w_field.value, psi_field.value, label, q, S, points, problems):
-                W = sp.ImmutableMatrix(w_field.value)
+            with about(f"{key}.velocity", f"{label}.velocity"):
+                if check_wall_velocity(
+                    w_field.value, psi_field.value, label, q, S, points, problems
+                ):
+                    W = sp.ImmutableMatrix(w_field.value)
         resolved.append((w, psi_field.value, nu, W))
     problems.raise_if_any()
 

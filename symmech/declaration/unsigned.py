@@ -62,10 +62,10 @@ def check_metric_signs(
         for p in params
         if p in free and p.is_positive is None and p.is_negative is None and p.is_zero is None
     ]
-    refused = not first.items or not all("not positive definite" in m for m in first.items)
+    refused = not first.items or not all("not positive definite" in m.message for m in first.items)
     if refused or not unsigned:
-        for m in first.items:
-            problems.add(m)
+        for m in first.items:  # (recorded again: in the caller's field)
+            problems.add(m.message)
         return None
     proxy = {p: sp.Dummy(p.name, positive=True) for p in unsigned}
     G_pos = G.xreplace(proxy)
@@ -75,8 +75,8 @@ def check_metric_signs(
     second = Problems()
     check_metric(G_pos, label, pos_points, second, q, T_pos)
     if second.items:
-        for m in first.items:
-            problems.add(m)
+        for m in first.items:  # (recorded again: in the caller's field)
+            problems.add(m.message)
         return None
     definite = [p for p in pos_points.for_(G_pos) if _definite(G_pos, p) is True]
     needed = []

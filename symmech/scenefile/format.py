@@ -142,15 +142,6 @@ def _toml_type(value: object) -> str:
     return names.get(type(value), f"{type(value).__name__} (a TOML date or time)")
 
 
-def _after_field(problem: str, end: int) -> str:
-    """``problem`` without the field name that ends at ``end`` (kept if more than a colon
-    follows: ``walls[0].psi = x does not ...`` reads better whole)."""
-    rest = problem[end:]
-    if rest.startswith(":"):
-        return rest[1:].strip()
-    return problem
-
-
 def _allowed_kinds(field: str) -> str:
     """What the expression ``field`` may use, for error messages."""
     if field.startswith("parameters."):

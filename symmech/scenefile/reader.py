@@ -15,7 +15,7 @@ from symmech.declaration.expressions import (
 )
 from symmech.declaration.symbols import velocity_of
 from symmech.declaration.wall import LAWS, Wall
-from symmech.errors import SceneError
+from symmech.errors import Problem, SceneError
 from symmech.scene import Scene
 from symmech.scenefile.builtin import _resolve_path
 from symmech.scenefile.format import (
@@ -26,7 +26,6 @@ from symmech.scenefile.format import (
     MAX_FILE_BYTES,
     MAX_WALLS,
     SceneFileError,
-    _after_field,
     _clip,
     _number_text,
     _short,
@@ -315,39 +314,53 @@ class _Loader(_NamesLoader):
                 name=name,
             )
         except SceneError as exc:
-            for problem in exc.problems:
+            for problem in exc.records:
                 field_name, line, rest = self.locate_problem(problem)
                 self.problems.add(rest, field=field_name, line=line)
             self.problems.raise_if_any(self.source)
             raise  # pragma: no cover - every SceneError has at least one problem
         return SceneFile(scene=scene, defaults=defaults, functions=fns, description=description)
 
-    def locate_problem(self, problem: str) -> tuple[str | None, int | None, str]:
-        """The field a Scene validation message is about, its line in the file, and the
-        message without its leading ``field:`` (the caller writes ``field (line N):``)."""
-        m = re.match(r"(walls\[\d+\])(?: \([^)]*\))?(\.\w+)?(\[\d+\])?", problem)
-        if m:
-            base = m.group(1)
-            full = base + (m.group(2) or "")
-            elem = full + (m.group(3) or "")
-            for key in (elem, full, base):
+    def locate_problem(self, problem: Problem) -> tuple[str | None, int | None, str]:
+        """The field a Scene validation problem is about, its line in the file, and the
+        message without its leading ``field:`` (the caller writes ``field (line N):``).
+
+        The field is the problem's own (:class:`~symmech.errors.Problem`): the most
+        specific of it and its parents (``walls[0].impulsive_constraints[1]``, then
+        ``walls[0].impulsive_constraints``, then ``walls[0]``) that the file has a line
+        for."""
+        path, rest = problem.field, problem.reason
+        parents = _parents(path) if path is not None else []
+        if not parents or parents[-1] not in _LOCATED:
+            return None, None, problem.message
+        root = parents[-1]
+        if root == "walls" and len(parents) > 1:  # one wall: its keys, else the wall itself
+            for key in parents[:-1]:
                 if key in self.field_lines:
-                    return key, self.field_lines[key], _after_field(problem, m.end())
-            return base, None, _after_field(problem, m.end())
-        m = re.match(
-            r"(constraints|forces)(\[\d+\])?|(metric|kinetic_energy|potential|frame|walls)\b",
-            problem,
-        )
-        if m:
-            key = m.group(0)
-            rest = _after_field(problem, m.end())
+                    return key, self.field_lines[key], rest
+            return parents[-2], None, rest
+        for key in parents:
             if key in self.field_lines:
                 return key, self.field_lines[key], rest
-            root = m.group(1) or m.group(3)
-            if root in ("frame", "walls"):
-                return root, self.loc.table(root) or self.line(None, root), rest
-            return root, self.field_lines.get(root) or self.line(None, root), rest
-        return None, None, problem
+        if root in ("frame", "walls"):
+            return root, self.loc.table(root) or self.line(None, root), rest
+        return root, self.field_lines.get(root) or self.line(None, root), rest
+
+
+#: The declaration fields a scene file gives a line for.
+_LOCATED = ("constraints", "forces", "metric", "kinetic_energy", "potential", "frame", "walls")
+
+
+def _parents(path: str) -> list[str]:
+    """``walls[0].psi`` -> ``["walls[0].psi", "walls[0]", "walls"]``: the path and its
+    parents, most specific first (a path is ``name``, ``name[i]`` and ``.name`` parts)."""
+    out = [path]
+    while True:
+        cut = max(path.rfind("."), path.rfind("["))
+        if cut <= 0:
+            return out
+        path = path[:cut]
+        out.append(path)
 
 
 def _load(text: str, *, source: str, default_name: str, path: Path | None) -> SceneFile:
