@@ -10,7 +10,7 @@ sympy polynomial domain, the fraction field ``K = QQ(k, r, sin(theta), ...)`` bu
 dummy generators, and the linear algebra is done in K, where every element is a
 cancelled fraction.
 
-Pythagorean normal form (``RationalField(..., trig=True)``).  ``tan``, ``cot``, ``sec``
+Pythagorean normal form (every :class:`RationalField`).  ``tan``, ``cot``, ``sec``
 and ``csc`` are first written with sin and cos.  K knows no relation between its
 generators.  For every argument ``a`` of a sin or cos, both ``sin(a)`` and ``cos(a)`` are
 made generators, and :meth:`RationalField.reduce` replaces ``sin(a)^2`` by
@@ -110,17 +110,15 @@ def _generators(exprs: Sequence[sp.Expr]) -> dict[sp.Basic, sp.Expr]:
 class RationalField:
     """A common domain for a set of matrices and scalars (or sympy fallback).
 
-    With ``trig=True`` the elements are kept in the Pythagorean normal form of the module
-    docstring by :meth:`normal` (and :meth:`element`, :meth:`solve`, :meth:`matmul`).
+    The elements are kept in the Pythagorean normal form of the module docstring by
+    :meth:`normal` (and :meth:`element`, :meth:`matrix`, :meth:`solve`, :meth:`matmul`).
     """
 
-    def __init__(self, exprs: Sequence[sp.Expr], *, trig: bool = False):
-        self.trig = trig
+    def __init__(self, exprs: Sequence[sp.Expr]):
         # distinct entries only: the work follows the structure (an identity metric of
         # any size has the two entries 0 and 1)
         exprs = list(dict.fromkeys(sp.sympify(e) for e in exprs))
-        if trig:
-            exprs = [_sin_cos(e) for e in exprs]
+        exprs = [_sin_cos(e) for e in exprs]
         self.forward = _generators(exprs)
         self.back = {}
         for key, value in self.forward.items():
@@ -132,14 +130,14 @@ class RationalField:
                     1, q
                 )
         replaced = [sp.sympify(e).xreplace(self.forward) for e in exprs] or [sp.S.One]
-        if trig:  # sin(a) and cos(a) always come in pairs, so the reduction is canonical
-            for key in list(self.forward):
-                if isinstance(key, (sp.sin, sp.cos)):
-                    partner = (sp.cos if isinstance(key, sp.sin) else sp.sin)(key.args[0])
-                    if partner not in self.forward:
-                        self.forward[partner] = dummy = sp.Dummy("gen")
-                        self.back[dummy] = partner
-                        replaced.append(dummy)
+        # sin(a) and cos(a) always come in pairs, so the reduction is canonical
+        for key in list(self.forward):
+            if isinstance(key, (sp.sin, sp.cos)):
+                partner = (sp.cos if isinstance(key, sp.sin) else sp.sin)(key.args[0])
+                if partner not in self.forward:
+                    self.forward[partner] = dummy = sp.Dummy("gen")
+                    self.back[dummy] = partner
+                    replaced.append(dummy)
         #: why the field declined (None when it exists): a budget of symmech.algebra.budget
         self.declined: str | None = _over_budget(replaced)
         #: the sympy domain (a fraction field, or an exact ring/field), None when inexact
@@ -151,7 +149,7 @@ class RationalField:
         self._powers: dict[tuple[int, int], Any] = {}
         self._exprs: dict[Any, sp.Expr] = {}
         self._elements: dict[sp.Expr, Frac] = {}
-        if trig and self.K is not None and self.K.is_FractionField:
+        if self.K is not None and self.K.is_FractionField:
             index = {s: i for i, s in enumerate(self.K.symbols)}
             sines = {k.args[0]: v for k, v in self.forward.items() if isinstance(k, sp.sin)}
             for k, v in self.forward.items():
@@ -166,7 +164,7 @@ class RationalField:
     # -- conversion ---------------------------------------------------------------
     def _in(self, e: sp.Expr) -> sp.Expr:
         e = sp.sympify(e)
-        return (_sin_cos(e) if self.trig else e).xreplace(self.forward)
+        return _sin_cos(e).xreplace(self.forward)
 
     def _out(self, e: sp.Expr) -> sp.Expr:
         return sp.sympify(e).xreplace(self.back) if self.back else e
@@ -467,11 +465,11 @@ def _quotient(field: Any, num: Any, den: Any) -> Frac:
 
 
 def common_domain(
-    matrices: Sequence[sp.MatrixBase], scalars: Sequence[sp.Expr] = (), *, trig: bool = False
+    matrices: Sequence[sp.MatrixBase], scalars: Sequence[sp.Expr] = ()
 ) -> RationalField:
     """A domain holding every entry of ``matrices`` and every scalar."""
     exprs = [sp.sympify(e) for M in matrices for e in M] + [sp.sympify(s) for s in scalars]
-    return RationalField(exprs, trig=trig)
+    return RationalField(exprs)
 
 
 def field_zero(e: sp.Expr) -> bool:
@@ -481,7 +479,7 @@ def field_zero(e: sp.Expr) -> bool:
     e = sp.sympify(e)
     if e == 0:
         return True
-    field = RationalField([e], trig=True)
+    field = RationalField([e])
     if not field.exact:
         return False
     try:
@@ -497,7 +495,7 @@ def field_solve(A: sp.MatrixBase, B: sp.MatrixBase) -> sp.Matrix | None:
     regular (a ``ZeroDivisionError`` means it is not).
     """
     A, B = sp.Matrix(A), sp.Matrix(B)
-    ring = common_domain([A, B], trig=True)
+    ring = common_domain([A, B])
     if not ring.exact:
         return None
     X = ring.solve(ring.rows(A), ring.rows(B))

@@ -108,7 +108,7 @@ def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
         return expr
     if sp.count_ops(expr) > max_ops:
         return expr
-    field = RationalField([expr], trig=True)
+    field = RationalField([expr])
     if not field.exact:
         return sp.factor_terms(expr)
     return field.expr(field.element(expr))

@@ -109,7 +109,7 @@ def constrained_solution(
     check_level(level, "constrained_solution", "level")
     n, m = M.rows, mu.rows
     if level != "none" and m:
-        field = common_domain([M, f, mu, rate], trig=True)
+        field = common_domain([M, f, mu, rate])
         if field.exact:
             zero = field.K.zero
             B = bordered(field.rows(M), field.rows(mu), zero)

@@ -106,7 +106,7 @@ def _field_projectors(g: sp.MatrixBase, mu: sp.MatrixBase) -> tuple[sp.Matrix, s
     afterwards costs seconds and leaves hundreds of thousands of operations for a
     generic 4 x 4 polynomial metric.
     """
-    field = common_domain([g, mu], trig=True)
+    field = common_domain([g, mu])
     if not field.exact:
         return None
     n, m = g.rows, mu.rows

@@ -378,7 +378,7 @@ def _lu_solve(S: sp.Matrix, B: sp.Matrix, level: Level) -> tuple[sp.Matrix, bool
     zero testing, to be simplified by the caller.
     """
     if level != "none":
-        field = common_domain([S, B], trig=True)
+        field = common_domain([S, B])
         if field.exact:
             X = field.solve(field.rows(S), field.rows(B))
             if X is not None:

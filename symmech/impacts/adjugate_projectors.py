@@ -237,7 +237,7 @@ def shared_denominators(
 ) -> Denominators | None:
     """Only the shared denominators of the construction (cheap: no cancellation), or
     None when the entries admit no rational-function field or exceed the budget."""
-    field = common_domain([g, mu, dpsi, nu], trig=True)
+    field = common_domain([g, mu, dpsi, nu])
     if field.K is None or not field.K.is_FractionField:
         return None
     try:

@@ -337,7 +337,7 @@ def _symbolic(s: _Setup) -> Formed:
     zero = sp.zeros(n, 1)
     k_loss, k_c = (1 - a) / (1 + a), 2 * a / (1 + a)
     ring = common_domain(
-        [proj.g, proj.P, proj.PP, proj.T, s.matrix, s.offset, s.W], [a, k_loss, k_c], trig=True
+        [proj.g, proj.P, proj.PP, proj.T, s.matrix, s.offset, s.W], [a, k_loss, k_c]
     )
     g, PP, Tt = (ring.matrix(M) for M in (proj.g, proj.PP, proj.T))
     x = Affine.of(ring, sp.Matrix(proj.P), zero)

@@ -134,7 +134,7 @@ def impact_projectors(
     nu = sp.Matrix(nu) if nu.rows else sp.zeros(0, n)
     P, Q = (sp.Matrix(M) for M in (permanent or permanent_projectors(g, mu, level)))
     if level != "none":
-        field = common_domain([g, mu, dpsi, nu], trig=True)
+        field = common_domain([g, mu, dpsi, nu])
         if field.K is not None and not field.K.is_FractionField:
             return _in_field(field, g, mu, dpsi, nu, P, Q, check)
         routed = adjugate_route(field, g, mu, dpsi, nu, check)
