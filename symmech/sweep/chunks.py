@@ -26,7 +26,7 @@ from symmech.codegen.module import NumericalError
 from symmech.scene import Scene
 from symmech.simulate.csim import FINISHED_CODE, INFO_HEAD, REACHED_END_CODE, decode
 from symmech.simulate.hybrid import Options
-from symmech.simulate.result import EVENT_KINDS
+from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.system import Functions, HybridSystem, SimulationError, check_parameters
 from symmech.sweep.grid import Columns
 from symmech.sweep.worker import ChunkInput, LibrarySource, LoopOptions
@@ -299,12 +299,22 @@ def _evaluate(
         return col
 
 
+#: The statuses of a sweep's runs: the simulator's, and "invalid" for a run refused by the
+#: input checks; the ``status`` column of a chunk holds their indices (int8 codes), and
+#: the table their names (a categorical column).
+RUN_STATUSES = (*STATUSES, "invalid")
+_INVALID = RUN_STATUSES.index("invalid")
+_FAILED = RUN_STATUSES.index("failed")
+_FINISHED_STATUS = RUN_STATUSES.index("finished")
+
+
 def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | None) -> dict:
     """The chunk's table (a dict of columns, ``run`` first) from the info rows of the runs
-    sent (None with ``error``: the chunk failed as a whole, its runs are ``"failed"``)."""
+    sent (None with ``error``: the chunk failed as a whole, its runs are ``"failed"``);
+    ``status`` as codes into :data:`RUN_STATUSES`."""
     r = prep.hi - prep.lo
     n = plan.scene.n
-    status = np.array(["invalid"] * r, dtype=object)
+    status = np.full(r, _INVALID, dtype=np.int8)  # codes into RUN_STATUSES
     message = np.array([None] * r, dtype=object)
     t = np.full(r, np.nan)
     q = np.full((r, n), np.nan)
@@ -318,17 +328,17 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
     sent = prep.order
     if info is None:
         for i in sent:
-            status[i], message[i] = "failed", error
+            status[i], message[i] = _FAILED, error
         sent = np.zeros(0, dtype=np.int64)
     else:
         walls = tuple(w.name for w in plan.scene.walls)
         # a run that reached t_end decodes to ("finished", "reached t_end = ...", None):
         # only the others are decoded one by one
-        status[sent] = "finished"
+        status[sent] = _FINISHED_STATUS
         for row in np.flatnonzero((info[:, 0] != _FINISHED) | (info[:, 1] != _REACHED_END)):
             st, msg, acc = decode(info[row], walls, plan.options.t_end)
             i = sent[row]
-            status[i] = st
+            status[i] = RUN_STATUSES.index(st)
             message[i] = None if st == "finished" else msg
             rest[i] = np.nan if acc is None else acc
         t[sent] = info[:, 21]

@@ -40,7 +40,7 @@ from symmech.simulate.csim import INFO_HEAD, library, options_vector
 from symmech.simulate.hybrid import Options
 from symmech.simulate.run import CONTACT_MODES, system_for
 from symmech.simulate.system import Functions, SimulationError
-from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
+from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, RUN_STATUSES, Plan
 from symmech.sweep.grid import read_grid, resolve_columns
 from symmech.sweep.runner import Progress, run_dask, run_local
 from symmech.sweep.store import Store
@@ -174,7 +174,10 @@ def _schema(plan: Plan) -> Any:
     ints = {"steps", *(c for c in FIXED_COLUMNS if c.startswith("n_"))}
     fields = [pa.field("run", pa.int64())]
     for name in plan.column_names():
-        kind = pa.string() if name in ("status", "message") else pa.float64()
+        if name == "status":  # categorical: names of RUN_STATUSES
+            kind = pa.dictionary(pa.int8(), pa.string())
+        else:
+            kind = pa.string() if name == "message" else pa.float64()
         fields.append(pa.field(name, pa.int64() if name in ints else kind))
     return pa.schema(fields)
 
@@ -330,7 +333,11 @@ def _execute(
         chunks = [c for c in chunks if c[0] not in done]
     bar = Progress(sum(hi - lo for _, lo, hi in chunks), progress)
 
+    names = pa.array(RUN_STATUSES, type=pa.string())
+
     def sink(k: int, cols: dict) -> None:
+        # the status codes become a dictionary column: no string per run is converted
+        cols["status"] = pa.DictionaryArray.from_arrays(cols["status"], names)
         t = pa.table(cols, schema=schema)
         if saver is not None:
             saver.write(k, t)
