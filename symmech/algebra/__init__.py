@@ -6,6 +6,7 @@ their cost.
 * :mod:`~symmech.algebra.field`: the rational-function field of a set of entries, always
   in the Pythagorean normal form (``sin^2 -> 1 - cos^2``); exact solves and inverses;
 * :mod:`~symmech.algebra.laplace`: division-free adjugates and determinants;
+* :mod:`~symmech.algebra.block_structure`: the diagonal blocks of a sparse pattern;
 * :mod:`~symmech.algebra.energy_forms`: affine maps and quadratic forms over that field
   (the energy identities of Carnot's theorems);
 * :mod:`~symmech.algebra.simplification` and :mod:`~symmech.algebra.stability`: the

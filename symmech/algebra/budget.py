@@ -37,6 +37,7 @@ from contextvars import ContextVar
 
 import sympy as sp
 
+from symmech.algebra.block_structure import diagonal_blocks
 from symmech.errors import SymmechError
 
 __all__ = [
@@ -331,23 +332,9 @@ def determinant_terms(M: sp.MatrixBase) -> int:
     weights = [
         [expanded_terms(M[i, j])[0] if M[i, j] != 0 else 0 for j in range(n)] for i in range(n)
     ]
-    parent = list(range(n))
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        for j in range(n):
-            if weights[i][j] or weights[j][i]:
-                parent[find(i)] = find(j)
-    blocks: dict[int, list[int]] = {}
-    for i in range(n):
-        blocks.setdefault(find(i), []).append(i)
+    blocks = diagonal_blocks(n, lambda i, j: bool(weights[i][j]))
     worst = 0
-    for block in blocks.values():
+    for block in blocks:
         sub = [[weights[i][j] for j in block] for i in block]
         worst = max(worst, _permanent(sub))
     return worst

@@ -59,6 +59,7 @@ from sympy.polys.matrices import DomainMatrix
 from sympy.polys.polyerrors import CoercionFailed
 
 from symmech.algebra import budget as limits
+from symmech.algebra.block_structure import diagonal_blocks
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.laplace import adjugate_det
 
@@ -417,23 +418,7 @@ def _sin_cos(e: sp.Expr) -> sp.Expr:
 
 def _blocks(A: Rows) -> list[list[int]]:
     """Index sets of the diagonal blocks of A (connected components of its pattern)."""
-    n = len(A)
-    parent = list(range(n))
-
-    def find(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for i in range(n):
-        for j in range(n):
-            if i != j and A[i][j]:
-                parent[find(i)] = find(j)
-    groups: dict[int, list[int]] = {}
-    for i in range(n):
-        groups.setdefault(find(i), []).append(i)
-    return sorted(groups.values())
+    return diagonal_blocks(len(A), lambda i, j: bool(A[i][j]))
 
 
 def _monomial_gcd(p: Any) -> tuple[tuple[int, ...], Any]:

@@ -417,13 +417,19 @@ def declare(
             with about(f"forces[{k}]"):
                 check_real(e, f"forces[{k}]", points, problems)
 
-    rows = []
-    for f in constraint_fields:
-        if f is not None and f.ok and basis_ok:
-            with about(f.path, f.label):
-                rows.append(constraint_row(f, v, points, problems))
-        else:
-            rows.append(None)
+    def form_rows(fields: Sequence[Field | None]) -> list[list[sp.Expr] | None]:
+        """The rows of linear velocity forms, each checked in its own field (None where
+        the field could not be read)."""
+        out: list[list[sp.Expr] | None] = []
+        for f in fields:
+            if f is not None and f.ok and basis_ok:
+                with about(f.path, f.label):
+                    out.append(constraint_row(f, v, points, problems))
+            else:
+                out.append(None)
+        return out
+
+    rows = form_rows(constraint_fields)
     m = len(constraint_items)
     mu = sp.zeros(0, n)
     with about("constraints"):
@@ -447,13 +453,7 @@ def declare(
                 )
             elif psi_value is not None and check_real(psi_value, f"{label}.psi", points, problems):
                 check_wall_gradient(psi_value, f"{label}.psi", q, points, problems)
-        nu_rows = []
-        for f in nu_fields:
-            if f is not None and f.ok and basis_ok:
-                with about(f.path, f.label):
-                    nu_rows.append(constraint_row(f, v, points, problems))
-            else:
-                nu_rows.append(None)
+        nu_rows = form_rows(nu_fields)
         if psi_field is None or any(r is None for r in nu_rows):
             continue
         nu = sp.Matrix(nu_rows) if nu_rows else sp.zeros(0, n)
