@@ -12,7 +12,10 @@ vector, so the baseline below runs the same thing) go through
 * **sweep, Dask**: ``sm.sweep(..., client=Client(LocalCluster(n_workers=<cores>,
   processes=True, threads_per_worker=1)))`` with chunks of ``--dask-chunk`` runs
   (default 10^4); the cluster is started and the library loaded on every worker (one small
-  sweep) before the clock starts.
+  sweep) before the clock starts;
+* **floor**: the same sweep's ``run_chunk`` calls alone as Dask tasks, all submitted at
+  once and gathered (no checks, no table): the cost of going through Dask at all on this
+  machine, where the scheduler and the client share the cores with the workers.
 
 Printed per route: runs per second; seconds per run; the route's overhead per run over the
 baseline's CPU time per run (``(workers x T_route - T_baseline) / N``, as a fraction of
@@ -105,6 +108,32 @@ def _serial_share(scene, grid, t_end: float, kw: dict) -> float:
     return (total - spent[0]) / total
 
 
+def _dask_floor(client, scene, grid, t_end: float, kw: dict, chunk: int) -> float:
+    """Wall time of the sweep's C work alone as Dask tasks: the very ``run_chunk`` calls of
+    a sweep in chunks of ``chunk`` (captured from a 1-thread sweep), submitted at once
+    with the library scattered, results gathered; no checks, no table.  What any route
+    through Dask costs on this machine, whatever the sweep does around it."""
+    from symmech.sweep import runner
+
+    calls = []
+    real = runner.run_chunk
+
+    def capture(*args):
+        calls.append(args)
+        return real(*args)
+
+    runner.run_chunk = capture
+    try:
+        sm.sweep(scene, grid, t_end, threads=1, chunk=chunk, **kw)
+    finally:
+        runner.run_chunk = real
+    source = client.scatter(calls[0][0], broadcast=True, hash=False)
+    client.gather([client.submit(real, source, c, o, pure=False) for _, c, o in calls[:2]])
+    start = time.perf_counter()
+    client.gather([client.submit(real, source, c, o, pure=False) for _, c, o in calls])
+    return time.perf_counter() - start
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=20_000)
@@ -148,6 +177,7 @@ def main() -> None:
             t_dask, dsk = _timed(
                 sm.sweep, scene, grid, c.t_end, client=client, chunk=args.dask_chunk, **kw
             )
+            t_floor = _dask_floor(client, scene, grid, c.t_end, kw, args.dask_chunk)
             same = one.equals(loc) and one.equals(dsk)
             serial = _serial_share(scene, grid, c.t_end, kw)
             amdahl = 1 / (cores * (serial + (1 - serial) / cores))
@@ -159,6 +189,7 @@ def main() -> None:
                 ("sweep, 1 thread", t_one, 1),
                 (f"sweep, local {cores} threads", t_loc, cores),
                 (f"sweep, Dask {cores} workers (chunk {args.dask_chunk})", t_dask, cores),
+                (f"floor: bare run_chunk tasks on {cores} Dask workers", t_floor, cores),
             ):
                 overhead = (workers * T - t_base) / N
                 batch = t_base if workers == 1 else t_base2

@@ -126,7 +126,10 @@ def run_dask(
     source = client.scatter(plan.source, broadcast=True, hash=False)
     todo = iter(chunks)
     preps: dict[str, Any] = {}
-    queue = as_completed()
+    # results are fetched by the client's event loop as they complete (no blocking
+    # ``result()`` round trip per chunk from this thread); a failed chunk yields its
+    # exception instead of raising
+    queue = as_completed(with_results=True, raise_errors=False)
 
     def submit() -> bool:
         nxt = next(todo, None)
@@ -143,11 +146,12 @@ def run_dask(
     for _ in range(window):
         if not submit():
             break
-    for fut in queue:
+    for fut, result in queue:
         prep = preps.pop(fut.key)
-        try:
-            info, error = fut.result(), None
-        except Exception as exc:
+        if fut.status == "finished":
+            info, error = result, None
+        else:  # "error": (type, exception, traceback); "cancelled": the exception
+            exc = result[1] if isinstance(result, tuple) else result
             info = None
             error = f"chunk {prep.index} failed on the cluster: {type(exc).__name__}: {exc}"
         fut.release()
