@@ -8,9 +8,10 @@ sympy polynomial domain (the fraction field ``QQ(k, r, alpha, sin(theta), ...)``
 :func:`sympy.polys.constructor.construct_domain` after replacing functions and radicals
 by dummy generators), where sums and products are canonical, so "is this identically
 zero" is exact and cheap (the field itself lives in :mod:`symmech.algebra.field`).
-Relations between generators (``sin^2 + cos^2 = 1``,
-``sqrt(u)^2 = u``) are not known to the field, so a non-zero result is passed through
-:func:`sympy.cancel` / :func:`sympy.simplify` before it is reported.
+The field keeps ``sin^2 + cos^2 = 1`` (its Pythagorean normal form) but not
+``sqrt(u)^2 = u``: a coefficient is therefore tested for zero once more after it is
+written back to sympy (where the square of a root becomes its base), and a non-zero one
+is passed through :func:`sympy.cancel` / :func:`sympy.simplify` before it is reported.
 If no such domain exists (the domain would be ``EX``), plain sympy arithmetic is used.
 """
 
@@ -19,9 +20,9 @@ from __future__ import annotations
 import sympy as sp
 
 from symmech.algebra import budget as limits
-from symmech.algebra.field import RationalField, common_domain, field_zero
+from symmech.algebra.field import RationalField, field_zero
 
-__all__ = ["Affine", "QuadraticForm", "common_domain"]
+__all__ = ["Affine", "QuadraticForm"]
 
 
 class Affine:

@@ -498,11 +498,10 @@ def _scalar_body(
         printed = [
             (blk, flat, printer.doprint(e)) for (blk, flat, _), e in zip(where, final, strict=True)
         ]
-    except (ValueError, TypeError, NotImplementedError):  # names, unprintable functions
-        return None
-    if any("Not supported" in line for line in temporaries) or any(
-        "Not supported" in text for _, _, text in printed
-    ):
+    except (ValueError, NotImplementedError):
+        # the strict math printer refuses what ``math`` cannot evaluate (ValueError) or
+        # print (NotImplementedError: e.g. an undefined function): no variant, and the
+        # module's vectorised function serves every call
         return None
     lines: list[str] = []
     if f.state == ("y",):

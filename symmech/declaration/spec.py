@@ -361,10 +361,11 @@ def declare(
                 f"{key}.impulsive_constraints[{A}]",
             )
             with about(nu_key, nu_label):
-                f = _velocity_form_field(c, nu_label, n, q_set | t_set, v_set, expr, problems)
-            if f is not None:
-                f.key = nu_key
-            nu_fields.append(f)
+                nu_fields.append(
+                    _velocity_form_field(
+                        c, nu_label, n, q_set | t_set, v_set, expr, problems, key=nu_key
+                    )
+                )
         alpha = Field(
             f"{label}.restitution",
             sp.sympify(w.restitution),
@@ -372,9 +373,7 @@ def declare(
             key=f"{key}.restitution",
         )
         with about(f"{key}.velocity", f"{label}.velocity"):
-            w_field = wall_velocity_field(w, label, n, q_set | t_set, expr, problems)
-        if w_field is not None:
-            w_field.key = f"{key}.velocity"
+            w_field = wall_velocity_field(w, label, n, q_set | t_set, expr, problems, key)
         wall_fields.append((key, label, w, psi_field, nu_fields, w_field))
         fields += [f for f in (psi_field, *nu_fields, alpha, w_field) if f is not None]
     names = [w.name for w in wall_list if isinstance(w, Wall) and w.name]

@@ -237,8 +237,10 @@ def _velocity_form_field(
     v_set: frozenset,
     expr: Callable[[object, str], sp.Expr | None],
     problems: Problems,
+    key: str | None = None,
 ) -> Field | None:
-    """A constraint: a coefficient row (n entries) or an expression linear in the velocities."""
+    """A constraint: a coefficient row (n entries) or an expression linear in the velocities
+    (``key``: its path in the declaration when not ``label``)."""
     if isinstance(c, (list, tuple, sp.MatrixBase)):
         entries = list(c)
         if len(entries) != n:
@@ -247,6 +249,6 @@ def _velocity_form_field(
         out = [expr(e, f"{label}[{j}]") for j, e in enumerate(entries)]
         if any(o is None for o in out):
             return None
-        return Field(label, sp.Matrix([out]), allowed)
+        return Field(label, sp.Matrix([out]), allowed, key=key)
     e = expr(c, label)
-    return None if e is None else Field(label, e, allowed | v_set, True)
+    return None if e is None else Field(label, e, allowed | v_set, True, key=key)

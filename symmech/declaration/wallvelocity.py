@@ -35,8 +35,10 @@ def wall_velocity_field(
     allowed: frozenset,
     expr: Callable[[object, str], sp.Expr | None],
     problems: Problems,
+    key: str | None = None,
 ) -> Field | None:
-    """The ``velocity`` of wall ``w`` as an n x 1 field, or None (absent or malformed)."""
+    """The ``velocity`` of wall ``w`` as an n x 1 field, or None (absent or malformed);
+    ``key`` is the wall's path in the declaration (``walls[0]``) when not ``label``."""
     if w.velocity is None:
         return None
     if len(w.velocity) != n:
@@ -48,7 +50,8 @@ def wall_velocity_field(
     entries = [expr(c, f"{label}.velocity[{j}]") for j, c in enumerate(w.velocity)]
     if any(e is None for e in entries):
         return None
-    return Field(f"{label}.velocity", sp.Matrix(n, 1, entries), allowed)
+    path = None if key is None else f"{key}.velocity"
+    return Field(f"{label}.velocity", sp.Matrix(n, 1, entries), allowed, key=path)
 
 
 def check_wall_velocity(

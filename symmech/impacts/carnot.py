@@ -61,7 +61,8 @@ import sympy as sp
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
-from symmech.algebra.energy_forms import Affine, QuadraticForm, common_domain
+from symmech.algebra.energy_forms import Affine, QuadraticForm
+from symmech.algebra.field import common_domain
 from symmech.algebra.identity import Unsupported, identically_zero
 from symmech.algebra.zero import is_zero
 from symmech.declaration.latex import latex_text

@@ -90,12 +90,6 @@ def _singular_blocks(C: sp.MatrixBase, point: dict) -> list[bool] | None:
         return None
 
 
-def _identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
-    """:func:`symmech.algebra.zero.is_zero` (sampled at ``points`` when it comes to that);
-    one that cannot be evaluated counts as not zero."""
-    return is_zero(expr, points) is True
-
-
 def _wall_gradient_ratio(
     C00: sp.Expr, g: sp.MatrixBase, dpsi: sp.MatrixBase, point: dict
 ) -> mp.mpf | None:
@@ -147,7 +141,7 @@ def check_regular(
         return _short(sp.expand((sp.Matrix(row) * v)[0, 0]))
 
     perm = [form(mu[a, :]) for a in range(mu.rows)]
-    if _identically_zero(C[0, 0], points):
+    if is_zero(C[0, 0], points) is True:
         raise _in_span(wall, f"the gradient of psi = {_short(psi)}", perm, "")
     k = C.rows
     verdicts = [v for v in (_singular_blocks(C, point) for point in points) if v is not None]

@@ -27,7 +27,8 @@ from typing import TYPE_CHECKING, Literal
 import sympy as sp
 
 from symmech.algebra import budget as limits
-from symmech.algebra.energy_forms import Affine, QuadraticForm, common_domain
+from symmech.algebra.energy_forms import Affine, QuadraticForm
+from symmech.algebra.field import common_domain
 from symmech.algebra.sampling import sample_points
 from symmech.algebra.simplification import Level
 from symmech.algebra.stability import stable_coefficient, stable_matrix
@@ -300,12 +301,6 @@ def _with_undefined(points: Sequence[dict], psi: sp.Expr) -> list[dict]:
     return [{**p, **x} for p, x in zip(points, extra, strict=True)]
 
 
-def _is_identically_zero(expr: sp.Expr, points: Sequence[dict]) -> bool:
-    """:func:`symmech.algebra.zero.is_zero` (sampled at ``points`` when it comes to that);
-    an expression that cannot be evaluated counts as not zero."""
-    return is_zero(expr, points) is True
-
-
 def derive_impact_map(
     declaration: Declaration,
     wall: ResolvedWall | int | str,
@@ -364,7 +359,7 @@ def derive_impact_map(
     dpsi = row * sp.Matrix(declaration.frame) if declaration.frame is not None else row
     psi_t = sp.diff(psi, TIME)
     points = sample_points([*q, *declaration.parameters, TIME])
-    if all(_is_identically_zero(e, points) for e in dpsi):
+    if all(is_zero(e, points) is True for e in dpsi):
         raise ImpactError(
             f"wall {rw.name!r}: psi = {psi} has zero gradient d psi/d q; it does not define a wall"
         )
@@ -404,7 +399,7 @@ def derive_impact_map(
                 f" got shape {V.shape}"
             )
         normal = (dpsi * V)[0, 0] + psi_t
-        if not _is_identically_zero(normal, points):
+        if is_zero(normal, points) is not True:
             raise ImpactError(
                 f"wall {rw.name!r}: wall_velocity V does not move with the wall:"
                 f" dpsi(V) + psi_t = {sp.simplify(normal)} != 0 (a point of the wall stays on"

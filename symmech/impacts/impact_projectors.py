@@ -34,7 +34,7 @@ import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 from sympy.polys.matrices import DomainMatrix
 
-from symmech.algebra.energy_forms import common_domain
+from symmech.algebra.field import common_domain
 from symmech.algebra.simplification import Level, tidy, tidy_matrix
 from symmech.constraints.projectors import projectors as permanent_projectors
 from symmech.constraints.projectors import solve_spd
