@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import sympy as sp
 
@@ -40,50 +41,63 @@ class Derivation:
         """Pretty-printed text, one ``== title`` block per section (ASCII art when not
         ``unicode``)."""
         printer = _pretty if unicode else _pretty_ascii
-        out = []
-        for title, value in self.sections:
-            out.append(f"== {title}")
-            if isinstance(value, str):
-                out.append(value)
-            elif isinstance(value, list):
-                if not value:
-                    out.append("(none)")
-                out.extend(f"{label} = {_render(e, printer)}" for label, _, e in value)
-            else:
-                out.append(_render(value, printer))
-            out.append("")
-        return "\n".join(out)
+        return "\n".join(
+            self._walk(
+                lambda title: f"== {title}",
+                str,
+                lambda plain, tex, e: f"{plain} = {_render(e, printer)}",
+                lambda value: _render(value, printer),
+                gap=True,
+            )
+        )
 
     def latex(self) -> str:
         """LaTeX: a ``\\paragraph`` per section and display math for each value."""
-        out = []
-        for title, value in self.sections:
-            out.append(f"\\paragraph{{{latex_text(title)}}}")
-            if isinstance(value, str):
-                out.append(latex_text(value))
-            elif isinstance(value, list):
-                if not value:
-                    out.append("(none)")
-                for _, label, e in value:
-                    out.append(f"\\[ {label} = {_render(e, sp.latex)} \\]")
-            else:
-                out.append(f"\\[ {_render(value, sp.latex)} \\]")
-            out.append("")
-        return "\n".join(out)
+        return "\n".join(
+            self._walk(
+                lambda title: f"\\paragraph{{{latex_text(title)}}}",
+                latex_text,
+                lambda plain, tex, e: f"\\[ {tex} = {_render(e, sp.latex)} \\]",
+                lambda value: f"\\[ {_render(value, sp.latex)} \\]",
+                gap=True,
+            )
+        )
 
     def _repr_markdown_(self) -> str:
-        out = [f"### Scene `{self.scene.name}`"]
-        for title, value in self.sections:
-            out.append(f"**{title}**")
-            if isinstance(value, str):
-                out.append(value)
-            elif isinstance(value, list):
-                if not value:
+        body = self._walk(
+            lambda title: f"**{title}**",
+            str,
+            lambda plain, tex, e: f"$$ {tex} = {_render(e, sp.latex)} $$",
+            lambda value: f"$$ {_render(value, sp.latex)} $$",
+            gap=False,
+        )
+        return "\n\n".join([f"### Scene `{self.scene.name}`", *body])
+
+    def _walk(
+        self,
+        title: Callable[[str], str],
+        text: Callable[[str], str],
+        item: Callable[[str, str, Any], str],
+        value: Callable[[Any], str],
+        gap: bool,
+    ) -> list[str]:
+        """The lines of every section, each part rendered by the given function: a title,
+        then its text, its labelled items (``(none)`` when empty) or its value; with
+        ``gap`` an empty line after each section."""
+        out = []
+        for heading, content in self.sections:
+            out.append(title(heading))
+            if isinstance(content, str):
+                out.append(text(content))
+            elif isinstance(content, list):
+                if not content:
                     out.append("(none)")
-                out.extend(f"$$ {label} = {_render(e, sp.latex)} $$" for _, label, e in value)
+                out.extend(item(plain, tex, e) for plain, tex, e in content)
             else:
-                out.append(f"$$ {_render(value, sp.latex)} $$")
-        return "\n\n".join(out)
+                out.append(value(content))
+            if gap:
+                out.append("")
+        return out
 
     def _repr_latex_(self) -> str:
         return self.latex()
