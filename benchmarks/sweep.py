@@ -40,6 +40,7 @@ from __future__ import annotations
 import argparse
 import os
 import time
+from functools import partial
 
 import numpy as np
 
@@ -87,10 +88,10 @@ def _rss(client) -> list[float]:
 def _serial_share(scene, grid, t_end: float, kw: dict) -> float:
     """The share of a 1-thread sweep's CPU time spent outside the C loop (Python holding
     the GIL: checks, tables), from CPU clocks, so the machine's load does not enter."""
-    from symmech.sweep import runner
+    from symmech.sweep import chunks
 
     spent = [0.0]
-    real = runner.run_chunk
+    real = chunks.run_chunk
 
     def timed(*args):
         start = time.thread_time()
@@ -98,13 +99,13 @@ def _serial_share(scene, grid, t_end: float, kw: dict) -> float:
         spent[0] += time.thread_time() - start
         return out
 
-    runner.run_chunk = timed
+    chunks.run_chunk = timed
     try:
         start = time.process_time()
         sm.sweep(scene, grid, t_end, threads=1, **kw)
         total = time.process_time() - start
     finally:
-        runner.run_chunk = real
+        chunks.run_chunk = real
     return (total - spent[0]) / total
 
 
@@ -113,25 +114,79 @@ def _dask_floor(client, scene, grid, t_end: float, kw: dict, chunk: int) -> floa
     a sweep in chunks of ``chunk`` (captured from a 1-thread sweep), submitted at once
     with the library scattered, results gathered; no checks, no table.  What any route
     through Dask costs on this machine, whatever the sweep does around it."""
-    from symmech.sweep import runner
+    from symmech.sweep import chunks
 
     calls = []
-    real = runner.run_chunk
+    real = chunks.run_chunk
 
     def capture(*args):
         calls.append(args)
         return real(*args)
 
-    runner.run_chunk = capture
+    chunks.run_chunk = capture
     try:
         sm.sweep(scene, grid, t_end, threads=1, chunk=chunk, **kw)
     finally:
-        runner.run_chunk = real
+        chunks.run_chunk = real
     source = client.scatter(calls[0][0], broadcast=True, hash=False)
     client.gather([client.submit(real, source, c, o, pure=False) for _, c, o in calls[:2]])
     start = time.perf_counter()
     client.gather([client.submit(real, source, c, o, pure=False) for _, c, o in calls])
     return time.perf_counter() - start
+
+
+def _install_c_clock() -> None:
+    """In this process: count the thread CPU time spent in the C loop (``run_chunk``)
+    on the chunks module itself (``_bench_c_seconds``), so a later call can read it."""
+    from symmech.sweep import chunks
+
+    if hasattr(chunks, "_bench_c_seconds"):
+        return
+    real = chunks.run_chunk
+    chunks._bench_c_seconds = [0.0]
+
+    def timed(*args):
+        start = time.thread_time()
+        try:
+            return real(*args)
+        finally:
+            chunks._bench_c_seconds[0] += time.thread_time() - start
+
+    chunks.run_chunk = timed
+
+
+def _cpu_now() -> tuple[float, float]:
+    """(CPU seconds of this process and of its parent if that is a Dask nanny, seconds
+    of them in the C loop)."""
+    import psutil
+
+    from symmech.sweep import chunks
+
+    me = psutil.Process()
+    cpu = sum(me.cpu_times()[:2])
+    parent = me.parent()
+    if parent is not None and "nanny" in " ".join(parent.cmdline()).lower():
+        cpu += sum(parent.cpu_times()[:2])
+    return cpu, chunks._bench_c_seconds[0]
+
+
+def _cpu_overhead(client, run) -> float:
+    """The CPU time of every process of the route (the client with the scheduler it
+    hosts, the workers and their nannies) beyond the C loop's, as a share of the C
+    loop's, over ``run()``: the overhead on a machine with no other load (and the
+    client's and scheduler's cost, on a cluster, moves off the workers' cores)."""
+    _install_c_clock()
+    before = [_cpu_now()]
+    if client is not None:
+        client.run(_install_c_clock)
+        before += list(client.run(_cpu_now).values())
+    run()
+    after = [_cpu_now()]
+    if client is not None:
+        after += list(client.run(_cpu_now).values())
+    cpu = sum(a[0] - b[0] for a, b in zip(after, before, strict=True))
+    c_loop = sum(a[1] - b[1] for a, b in zip(after, before, strict=True))
+    return (cpu - c_loop) / c_loop
 
 
 def main() -> None:
@@ -179,6 +234,13 @@ def main() -> None:
             )
             t_floor = _dask_floor(client, scene, grid, c.t_end, kw, args.dask_chunk)
             same = one.equals(loc) and one.equals(dsk)
+            cpu_local = _cpu_overhead(
+                None, partial(sm.sweep, scene, grid, c.t_end, threads=cores, **kw)
+            )
+            cpu_dask = _cpu_overhead(
+                client,
+                partial(sm.sweep, scene, grid, c.t_end, client=client, chunk=args.dask_chunk, **kw),
+            )
             serial = _serial_share(scene, grid, c.t_end, kw)
             amdahl = 1 / (cores * (serial + (1 - serial) / cores))
             N = args.runs
@@ -205,6 +267,14 @@ def main() -> None:
                     )
                 )
             rows.append((name, f"tables identical across routes: {same}", 0, 0, 0, 0, 0))
+            rows.append(
+                (
+                    name,
+                    f"CPU overhead over the C loop (all processes): local {cpu_local:.1%},"
+                    f" Dask {cpu_dask:.1%}",
+                    0, 0, 0, 0, 0,
+                )
+            )  # fmt: skip
             rows.append(
                 (
                     name,

@@ -40,6 +40,14 @@ __all__ = ["Scene"]
 _LATEX_MAX_ENTRIES = 64
 
 
+def _scene_of_declaration(decl: Declaration) -> Scene:
+    """The Scene of a validated declaration (for unpickling; see :meth:`Scene.__reduce__`)."""
+    scene = object.__new__(Scene)
+    object.__setattr__(scene, "_decl", decl)
+    object.__setattr__(scene, "_Scene__derived", {})
+    return scene
+
+
 def _latex_matrix(M: sp.MatrixBase) -> str:
     if M.rows * M.cols > _LATEX_MAX_ENTRIES:
         return rf"\text{{({M.rows} x {M.cols} matrix)}}"
@@ -159,6 +167,13 @@ class Scene:
         declaration as resolved (:meth:`~symmech.declaration.spec.Declaration.arguments`)."""
         args = {**self._decl.arguments(), **changes}
         return type(self)(args.pop("coordinates"), **args)
+
+    # -- pickling -----------------------------------------------------------------------
+    def __reduce__(self) -> tuple[Callable[[Declaration], Scene], tuple[Declaration]]:
+        """Pickle the validated declaration only: the copy is not validated again and
+        derives what it is asked for afresh (the cache of derived quantities, which may
+        hold loaded code, does not travel).  A sweep's Dask workers receive scenes so."""
+        return _scene_of_declaration, (self._decl,)
 
     # -- immutability -----------------------------------------------------------------
     def __setattr__(self, key: str, value: object) -> None:

@@ -19,7 +19,7 @@ import symmech as sm  # noqa: E402
 from symmech.bench.cases import case  # noqa: E402
 from symmech.examples import bouncing_ball  # noqa: E402
 from symmech.simulate import SimulationError  # noqa: E402
-from symmech.sweep import runner  # noqa: E402
+from symmech.sweep import chunks, runner  # noqa: E402
 
 BALL = {"m": 1.0, "g": 9.81, "alpha": 0.5}
 
@@ -147,14 +147,14 @@ def test_failures_are_rows(quartic):
 
 
 def test_a_chunk_that_cannot_run_is_failed_rows(monkeypatch):
-    real = runner.run_chunk
+    real = chunks.run_chunk
 
     def flaky(source, chunk, options):
         if chunk.index == 1:
             raise MemoryError("the C simulator could not allocate its work arrays")
         return real(source, chunk, options)
 
-    monkeypatch.setattr(runner, "run_chunk", flaky)
+    monkeypatch.setattr(chunks, "run_chunk", flaky)
     tab = sm.sweep(
         bouncing_ball(), {"y0": [1.0, 1.1, 1.2, 1.3]}, 1.0, v0=[0.0], params=BALL,
         chunk=2, threads=1,
@@ -163,27 +163,59 @@ def test_a_chunk_that_cannot_run_is_failed_rows(monkeypatch):
     assert "could not allocate" in tab.loc[2, "message"]
 
 
+def test_a_plan_pickles_to_data_and_runs_the_same_after(ellipse):
+    """What travels to a worker: a plan without loaded code, which loads it on first use
+    and tables a chunk exactly as the original plan does."""
+    import pickle
+
+    from symmech.sweep import driver
+
+    scene, params, c = ellipse
+    params = {k: v for k, v in params.items() if k != "alpha"}
+    kw = {"params": params, "q0": c.q0, "v0": c.v0}
+    grid = sm.sweep.product(alpha=[0.3, 0.8], theta0=[0.2, 1.0, 2.5])
+    captured = []
+    real = driver.run_local
+
+    def capture(plan, table, *rest):
+        captured.append((plan, table))
+        return real(plan, table, *rest)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(driver, "run_local", capture)
+        sm.sweep(scene, grid, 2.0, threads=1, expressions={"r": "x**2 + y**2"}, **kw)
+    plan, table = captured[0]
+    assert "system" in plan._live
+    copy = pickle.loads(pickle.dumps(plan))
+    assert copy._live == {} and copy.scene is not plan.scene
+    a = chunks.chunk_table(plan, 0, 0, table)
+    b = chunks.chunk_table(copy, 0, 0, table)
+    assert a.num_rows == 6
+    pd.testing.assert_frame_equal(a.to_pandas(), b.to_pandas(), check_exact=True)
+    assert copy.system.free is not plan.system.free  # loaded anew from the source
+
+
 def test_resume_from_a_partial_store(tmp_path, monkeypatch):
     grid = {"y0": np.linspace(0.5, 2.0, 10), "alpha": np.linspace(0.3, 0.9, 10)}
     kw = {"v0": [0.0], "params": {"m": 1, "g": 9.81}, "chunk": 3, "threads": 1}
     full = sm.sweep(bouncing_ball(), grid, 2.0, **kw)
     store = tmp_path / "out.parquet"
-    real = runner.finish
+    real = runner.chunk_table
     calls: list[int] = []
 
-    def stop_at_third(plan, prep, info, error):
-        calls.append(prep.index)
+    def stop_at_third(plan, index, lo, rows):
+        calls.append(index)
         if len(calls) == 3:
             raise KeyboardInterrupt  # the sweep is stopped half way
-        return real(plan, prep, info, error)
+        return real(plan, index, lo, rows)
 
-    monkeypatch.setattr(runner, "finish", stop_at_third)
+    monkeypatch.setattr(runner, "chunk_table", stop_at_third)
     with pytest.raises(KeyboardInterrupt):
         sm.sweep(bouncing_ball(), grid, 2.0, store=store, **kw)
     parts = sorted(p.name for p in store.glob("part-*.parquet"))
     assert parts == ["part-00000000.parquet", "part-00000001.parquet"]
     calls.clear()
-    monkeypatch.setattr(runner, "finish", lambda *a: (calls.append(a[1].index), real(*a))[1])
+    monkeypatch.setattr(runner, "chunk_table", lambda *a: (calls.append(a[1]), real(*a))[1])
     resumed = sm.sweep(bouncing_ball(), grid, 2.0, store=store, **kw)
     assert calls == [2, 3]  # only the missing chunks ran
     pd.testing.assert_frame_equal(resumed, full, check_exact=True)

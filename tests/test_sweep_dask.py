@@ -58,6 +58,23 @@ def test_cluster_table_equals_local_table_bit_for_bit(client, ellipse):
     assert set(client.run(loaded_libraries).values()) == {1}
 
 
+def test_the_client_only_collects_tables(client, ellipse, monkeypatch):
+    """On a cluster the whole life of a chunk (its checks, the C loop, its table) runs on
+    the workers: the client's own checks may be broken without changing the table."""
+    from symmech.sweep import chunks
+
+    scene, kw = ellipse
+    grid = sm.sweep.product(alpha=np.linspace(0.1, 1.0, 3), theta0=np.linspace(0, 3, 5))
+    local = sm.sweep(scene, grid, 3.0, chunk=4, threads=1, **kw)
+
+    def not_here(*args, **kwargs):
+        raise AssertionError("a chunk was prepared on the client")
+
+    monkeypatch.setattr(chunks, "prepare", not_here)
+    remote = sm.sweep(scene, grid, 3.0, chunk=4, client=client, **kw)
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+
+
 def test_failures_on_the_cluster_are_rows(client):
     grid = {"y0": [1.0, -1.0, 2.0], "alpha": [0.5, 0.5, 0.5]}
     kw = {"v0": [0.0], "params": {"m": 1, "g": 9.81}, "max_events": 3, "chunk": 1}
@@ -77,7 +94,7 @@ def test_a_task_that_raises_on_a_worker_is_failed_rows(client, monkeypatch):
 
     real = runner.run_dask
 
-    def broken_source(plan, *args):
+    def broken_source(plan, *args):  # a plan whose simulator source cannot compile
         bad = replace(plan.source, files=(("broken.c", "this is not C"),))
         return real(replace(plan, source=bad), *args)
 
@@ -94,22 +111,28 @@ def test_a_lost_worker_loses_no_finished_chunk(client, ellipse, monkeypatch):
     scene, kw = ellipse
     grid = sm.sweep.product(alpha=np.linspace(0.2, 0.9, 8), theta0=np.linspace(0, 3, 40))
     local = sm.sweep(scene, grid, 4.0, chunk=16, threads=2, **kw)
-    real = runner.finish
+    from symmech.sweep import driver as api
+
+    real = runner.run_dask
     killed: list[str] = []
 
-    def kill_one_worker_after_the_first_chunk(plan, prep, info, error):
-        if not killed:
-            victim = sorted(client.scheduler_info()["workers"])[0]
-            killed.append(victim)
-            try:
-                client.run(os._exit, 1, workers=[victim])
-            except Exception:  # the worker dies before it can answer
-                pass
-        return real(plan, prep, info, error)
+    def kill_one_worker_after_the_first_chunk(plan, grid, chunks, client, window, sink, tag):
+        def sink_then_kill(k, table):
+            sink(k, table)
+            if not killed:
+                victim = sorted(client.scheduler_info()["workers"])[0]
+                killed.append(victim)
+                try:
+                    client.run(os._exit, 1, workers=[victim])
+                except Exception:  # the worker dies before it can answer
+                    pass
 
-    monkeypatch.setattr(runner, "finish", kill_one_worker_after_the_first_chunk)
+        return real(plan, grid, chunks, client, window, sink_then_kill, tag)
+
+    monkeypatch.setattr(api, "run_dask", kill_one_worker_after_the_first_chunk)
     remote = sm.sweep(scene, grid, 4.0, chunk=16, client=client, **kw)
     assert killed and killed[0] not in client.scheduler_info()["workers"]  # it did die
+    assert remote["message"].isna().all(), remote["message"].dropna().unique()
     pd.testing.assert_frame_equal(local, remote, check_exact=True)
     client.wait_for_workers(2, timeout=60)  # the nanny restarts it for the next tests
 
@@ -120,14 +143,17 @@ def test_cluster_store_resumes(client, tmp_path, monkeypatch):
     store = tmp_path / "ball.parquet"
     first = sm.sweep(bouncing_ball(), grid, 2.0, client=client, store=store, **kw)
     (store / "part-00000001.parquet").unlink()
+    from symmech.sweep import driver as api
+
     calls: list[int] = []
-    real = runner.finish
+    real = runner.run_dask
 
-    def counting(plan, prep, info, error):
-        calls.append(prep.index)
-        return real(plan, prep, info, error)
+    def counting(plan, grid, chunks, *rest):
+        chunks = list(chunks)
+        calls.extend(k for k, _, _ in chunks)
+        return real(plan, grid, chunks, *rest)
 
-    monkeypatch.setattr(runner, "finish", counting)
+    monkeypatch.setattr(api, "run_dask", counting)
     resumed = sm.sweep(bouncing_ball(), grid, 2.0, client=client, store=store, **kw)
     assert calls == [1]
     pd.testing.assert_frame_equal(first, resumed, check_exact=True)

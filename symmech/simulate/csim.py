@@ -25,6 +25,7 @@ length is bounded by memory only.
 from __future__ import annotations
 
 import ctypes
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -45,6 +46,7 @@ __all__ = [
     "CLibrary",
     "SimulatorSpec",
     "library",
+    "parameter_vector",
     "simulator_source",
 ]
 
@@ -333,9 +335,15 @@ class CLibrary:
         self._lib = lib
 
     def parameters(self, values: dict[str, float]) -> np.ndarray:
-        """The flat parameter vector of the library (each module's order, then the scene's)."""
-        flat = [values[k] for names in self.spec.parameter_layout for k in names]
-        return np.ascontiguousarray([*flat, 0.0], dtype=np.float64)
+        """The flat parameter vector of the library (see :func:`parameter_vector`)."""
+        return parameter_vector(self.spec.parameter_layout, values)
+
+
+def parameter_vector(layout: Sequence[Sequence[str]], values: Mapping[str, float]) -> np.ndarray:
+    """The flat parameter vector of a simulator library whose ``parameter_layout`` is
+    ``layout``: each module's parameters in its order, then the scene's, then a pad."""
+    flat = [values[k] for names in layout for k in names]
+    return np.ascontiguousarray([*flat, 0.0], dtype=np.float64)
 
 
 def library(system: HybridSystem) -> CLibrary:

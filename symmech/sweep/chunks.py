@@ -11,27 +11,55 @@ makes, a larger one refused).  A run that fails a check is a row with status
 ``"invalid"`` and the message; it is not run.
 
 :func:`finish` decodes the info rows of the C loop (:func:`symmech.simulate.csim.decode`)
-into a table of one row per run (see :data:`FIXED_COLUMNS` and the chosen outputs).
+into a table of one row per run (see :data:`FIXED_COLUMNS` and the chosen outputs), and
+:func:`chunk_table` does the three steps for one chunk and returns its Arrow table.
+
+A :class:`Plan` pickles to plain data: the scene (its declaration), the generated source
+of its free-flight functions (the checks and outputs call them) and of the simulator, and
+the sweep's options.  The process that runs a chunk, the client's threads or a Dask worker,
+loads that code once per plan (:attr:`Plan.system`), so the whole life of a chunk runs where
+the chunk runs and a client only collects tables: its work per run does not grow with the
+cluster.
 """
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+import sympy as sp
 
+from symmech.codegen.generate import GeneratedCode
 from symmech.codegen.module import NumericalError
+from symmech.declaration.symbols import t as TIME
 from symmech.scene import Scene
-from symmech.simulate.csim import FINISHED_CODE, INFO_HEAD, REACHED_END_CODE, decode
+from symmech.simulate.csim import (
+    FINISHED_CODE,
+    INFO_HEAD,
+    REACHED_END_CODE,
+    decode,
+    parameter_vector,
+)
 from symmech.simulate.hybrid import Options
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.system import Functions, HybridSystem, SimulationError, check_parameters
 from symmech.sweep.grid import Columns
-from symmech.sweep.worker import ChunkInput, LibrarySource, LoopOptions
+from symmech.sweep.worker import ChunkInput, LibrarySource, LoopOptions, run_chunk
 
-__all__ = ["FIXED_COLUMNS", "INFO_OUTPUTS", "Plan", "Prepared", "finish", "prepare"]
+__all__ = [
+    "FIXED_COLUMNS",
+    "INFO_OUTPUTS",
+    "RUN_STATUSES",
+    "Plan",
+    "Prepared",
+    "chunk_table",
+    "failed_table",
+    "finish",
+    "prepare",
+]
 
 #: The info row's status and reason of a run that reached t_end (the template's
 #: ST_FINISHED and R_END, decoded by :func:`symmech.simulate.csim.decode`).
@@ -57,17 +85,22 @@ FIXED_COLUMNS = (
 )
 
 
+_LIVE_LOCK = threading.RLock()  # re-entrant: a build may need another live object
+
+
 @dataclass
 class Plan:
-    """Everything a chunk needs: the scene and its compiled system, the grid
-    (``table`` (N, k) with the meaning of each column), the values no column sets, the
-    loop's options and the library's source, and the outputs to compute."""
+    """Everything a chunk needs, as plain data (see the module docstring): the scene, the
+    generated code of its free flight (``free_code``) and the simulator's source, the
+    simulator's parameter ``layout``, the meaning of the grid's columns, the values no
+    column sets, the loop's options, the outputs and the expressions (sympy, in t, the
+    coordinates, velocities and parameters) to compute.  The grid's rows travel with each
+    chunk, not with the plan."""
 
     scene: Scene
-    system: HybridSystem
-    parameters_of: Callable[[dict[str, float]], np.ndarray]
+    free_code: GeneratedCode
+    layout: tuple[tuple[str, ...], ...]
     columns: Columns
-    table: np.ndarray
     base_params: dict[str, float]
     base_q: np.ndarray
     base_v: np.ndarray
@@ -76,20 +109,73 @@ class Plan:
     source: LibrarySource
     outputs: tuple[str, ...]
     energy_conserved: bool
-    expressions: dict[str, Callable[..., Any]] = field(default_factory=dict)
+    expressions: dict[str, sp.Expr] = field(default_factory=dict)
+    strategy: str = "auto"
+    definitions: dict[Any, Any] = field(default_factory=dict)
+    #: this process's loaded objects (the system, the expressions' functions, the schema);
+    #: never pickled
+    _live: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = dict(self.__dict__)
+        state["_live"] = {}
+        return state
+
+    def attach(self, system: HybridSystem) -> Plan:
+        """Use ``system`` (already loaded in this process) as :attr:`system`."""
+        self._live["system"] = system
+        return self
+
+    def _loaded(self, key: str, build: Callable[[], Any]) -> Any:
+        with _LIVE_LOCK:
+            hit = self._live.get(key)
+            if hit is None:
+                hit = self._live[key] = build()
+        return hit
 
     @property
-    def runs(self) -> int:
-        return int(self.table.shape[0])
+    def system(self) -> HybridSystem:
+        """The free-flight functions of the scene, loaded in this process once (contact
+        modes, which no check calls, would be generated on first use)."""
+
+        def build() -> HybridSystem:
+            system = HybridSystem(self.scene, "c", self.strategy, dict(self.definitions))
+            system.modules[None] = self.free_code.load()
+            return system
+
+        return self._loaded("system", build)
+
+    def expression_functions(self) -> dict[str, Callable[..., Any]]:
+        """Each expression as a NumPy function of (t, q..., v..., parameters...)."""
+
+        def build() -> dict[str, Callable[..., Any]]:
+            decl = self.scene.declaration
+            args = [TIME, *decl.coordinates, *decl.velocities, *self.scene.parameters]
+            return {k: sp.lambdify(args, e, modules="numpy") for k, e in self.expressions.items()}
+
+        return self._loaded("expressions", build)
+
+    def schema(self) -> Any:
+        """The Arrow schema of the result table (``status`` a dictionary column)."""
+        return self._loaded("schema", lambda: _schema(self))
+
+    def parameters_of(self, values: dict[str, float]) -> np.ndarray:
+        """The simulator library's parameter vector at ``values``."""
+        return parameter_vector(self.layout, values)
 
     @property
     def names(self) -> dict[str, list[str]]:
+        """The names of the coordinates, velocities and parameters (``q``, ``v``, ``p``)."""
         decl = self.scene.declaration
-        return {
-            "q": [str(c) for c in decl.coordinates],
-            "v": [str(v) for v in decl.velocities],
-            "p": [str(p) for p in self.scene.parameters],
-        }
+
+        def build() -> dict[str, list[str]]:
+            return {
+                "q": [str(c) for c in decl.coordinates],
+                "v": [str(v) for v in decl.velocities],
+                "p": [str(p) for p in self.scene.parameters],
+            }
+
+        return self._loaded("names", build)
 
     def column_names(self) -> list[str]:
         """The columns of the result table, in order (the index ``run`` aside)."""
@@ -104,16 +190,17 @@ class Plan:
             *self.expressions,
         ]
 
-    def states(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(Q0, V0, parameter values) of runs ``lo:hi``: the grid's columns over the base."""
-        r = hi - lo
+    def states(self, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(Q0, V0, parameter values) of the runs whose grid rows are ``grid``: the grid's
+        columns over the base."""
+        r = grid.shape[0]
         Q = np.tile(self.base_q, (r, 1))
         V = np.tile(self.base_v, (r, 1))
         pnames = self.names["p"]
         base = [self.base_params.get(p, np.nan) for p in pnames]
         PV = np.tile(np.array(base, dtype=np.float64), (r, 1))
         for j in range(len(self.columns.names)):
-            col = self.table[lo:hi, j]
+            col = grid[:, j]
             for target, index in ((Q, self.columns.q[j]), (V, self.columns.v[j])):
                 if index >= 0:
                     target[:, index] = col
@@ -122,15 +209,30 @@ class Plan:
         return Q, V, PV
 
 
+def _schema(plan: Plan) -> Any:
+    import pyarrow as pa
+
+    ints = {"steps", *(c for c in FIXED_COLUMNS if c.startswith("n_"))}
+    fields = [pa.field("run", pa.int64())]
+    for name in plan.column_names():
+        if name == "status":  # categorical: names of RUN_STATUSES
+            kind = pa.dictionary(pa.int8(), pa.string())
+        else:
+            kind = pa.string() if name == "message" else pa.float64()
+        fields.append(pa.field(name, pa.int64() if name in ints else kind))
+    return pa.schema(fields)
+
+
 @dataclass
 class Prepared:
-    """The client's record of a prepared chunk: its rows, the runs sent (``order``: their
-    positions in the chunk, in the order of the ChunkInput), the parameter values of each
-    vector, and the message of every refused run."""
+    """A prepared chunk: its runs ``lo:hi`` and their ``grid`` rows, the runs sent
+    (``order``: their positions in the chunk, in the order of the ChunkInput), the
+    parameter values of each vector, and the message of every refused run."""
 
     index: int
     lo: int
     hi: int
+    grid: np.ndarray
     chunk: ChunkInput
     order: np.ndarray
     group: np.ndarray
@@ -140,7 +242,12 @@ class Prepared:
 
 def _groups(rows: np.ndarray, group: np.ndarray) -> list[tuple[int, np.ndarray]]:
     """The rows of each parameter vector (the generated C functions take one per call)."""
-    return [(int(g), rows[group[rows] == g]) for g in np.unique(group[rows])]
+    if rows.size == 0:
+        return []
+    of = group[rows]
+    if (of == of[0]).all():  # the common case: one vector
+        return [(int(of[0]), rows)]
+    return [(int(g), rows[of == g]) for g in np.unique(of)]
 
 
 def _pvector(plan: Plan, values: dict[str, float]) -> np.ndarray | None:
@@ -187,10 +294,12 @@ def _without(rows: np.ndarray, messages: dict[int, str]) -> np.ndarray:
     return rows[~np.isin(rows, np.fromiter(messages, dtype=np.int64))]
 
 
-def prepare(plan: Plan, index: int, lo: int, hi: int) -> Prepared:
-    """Check and prepare the runs ``lo:hi`` (chunk ``index``; see the module docstring)."""
-    Q, V, PV = plan.states(lo, hi)
-    r = hi - lo
+def prepare(plan: Plan, index: int, lo: int, grid: np.ndarray) -> Prepared:
+    """Check and prepare the runs ``lo:lo + len(grid)`` whose grid rows are ``grid``
+    (chunk ``index``; see the module docstring)."""
+    grid = np.asarray(grid, dtype=np.float64).reshape(-1, len(plan.columns.names))
+    Q, V, PV = plan.states(grid)
+    r = grid.shape[0]
     messages: dict[int, str] = {}
     for what, a in (("q0", Q), ("v0", V)):
         for i in np.flatnonzero(~np.isfinite(a).all(axis=1)):
@@ -237,13 +346,14 @@ def prepare(plan: Plan, index: int, lo: int, hi: int) -> Prepared:
             else:
                 V[i] = fns[g].project(None, t0, Q[i], V[i])
         rows = _without(rows, messages)
-    order = rows[np.argsort(group[rows], kind="stable")]
-    used, local = np.unique(group[order], return_inverse=True)
-    starts = np.searchsorted(local.reshape(-1), np.arange(len(used) + 1)).astype(np.int64)
+    runs = _groups(rows, group)  # ascending vectors, rows in order within each
+    order = np.concatenate([idx for _, idx in runs]) if runs else rows
+    used = np.array([g for g, _ in runs], dtype=np.int64)
+    starts = np.cumsum([0, *(idx.size for _, idx in runs)], dtype=np.int64)
     P = np.array([plan.parameters_of(values[g]) for g in used]) if used.size else np.zeros((0, 1))
     Y = np.ascontiguousarray(np.hstack([Q, V])[order])
     chunk = ChunkInput(index=index, Y=Y, P=P, starts=starts)
-    return Prepared(index, lo, hi, chunk, order, group, values, messages)
+    return Prepared(index, lo, lo + r, grid, chunk, order, group, values, messages)
 
 
 def _outputs_at(
@@ -259,7 +369,7 @@ def _outputs_at(
                 p = _pvector(plan, prep.values[g])
                 col[idx] = _evaluate(plan, name, p, t[idx], q[idx], v[idx])
         out[name] = col
-    for name, fn in plan.expressions.items():
+    for name, fn in plan.expression_functions().items():
         col = np.full(r, np.nan)
         if sent.size:
             pnames = plan.names["p"]
@@ -311,24 +421,26 @@ _FINISHED_STATUS = RUN_STATUSES.index("finished")
 def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | None) -> dict:
     """The chunk's table (a dict of columns, ``run`` first) from the info rows of the runs
     sent (None with ``error``: the chunk failed as a whole, its runs are ``"failed"``);
-    ``status`` as codes into :data:`RUN_STATUSES`."""
+    ``status`` as codes into :data:`RUN_STATUSES`, ``message`` None when no run has one."""
     r = prep.hi - prep.lo
     n = plan.scene.n
     status = np.full(r, _INVALID, dtype=np.int8)  # codes into RUN_STATUSES
-    message = np.array([None] * r, dtype=object)
+    message = np.empty(r, dtype=object)  # None everywhere
+    noted = bool(prep.messages)  # whether any run has a message
     t = np.full(r, np.nan)
     q = np.full((r, n), np.nan)
     v = np.full((r, n), np.nan)
     counts = np.zeros((r, len(EVENT_KINDS)), dtype=np.int64)
     steps = np.zeros(r, dtype=np.int64)
     rest = np.full(r, np.nan)
-    stats = {k: np.full(r, np.nan) for k in INFO_OUTPUTS}
+    stats = {k: np.full(r, np.nan) for k in INFO_OUTPUTS if k in plan.outputs}
     for i, text in prep.messages.items():
         message[i] = text
     sent = prep.order
     if info is None:
         for i in sent:
             status[i], message[i] = _FAILED, error
+        noted = noted or sent.size > 0
         sent = np.zeros(0, dtype=np.int64)
     else:
         walls = tuple(w.name for w in plan.scene.walls)
@@ -340,21 +452,25 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
             i = sent[row]
             status[i] = RUN_STATUSES.index(st)
             message[i] = None if st == "finished" else msg
+            noted = noted or st != "finished"
             rest[i] = np.nan if acc is None else acc
-        t[sent] = info[:, 21]
-        q[sent] = info[:, INFO_HEAD : INFO_HEAD + n]
-        v[sent] = info[:, INFO_HEAD + n : INFO_HEAD + 2 * n]
-        counts[sent] = info[:, 17:21].astype(np.int64)
-        steps[sent] = info[:, 11].astype(np.int64)
-        for key, j in INFO_OUTPUTS.items():
-            stats[key][sent] = info[:, j]
-        if not plan.energy_conserved:
-            stats["energy_drift"][sent] = np.nan
+        # every run sent, in order (one parameter vector, none refused): slices, not
+        # fancy indexing, for the columns below
+        at: Any = slice(None) if sent.size == r and np.array_equal(sent, np.arange(r)) else sent
+        t[at] = info[:, 21]
+        q[at] = info[:, INFO_HEAD : INFO_HEAD + n]
+        v[at] = info[:, INFO_HEAD + n : INFO_HEAD + 2 * n]
+        counts[at] = info[:, 17:21]
+        steps[at] = info[:, 11]
+        for key, col in stats.items():
+            col[at] = info[:, INFO_OUTPUTS[key]]
+        if "energy_drift" in stats and not plan.energy_conserved:
+            stats["energy_drift"][at] = np.nan
     cols: dict[str, Any] = {"run": np.arange(prep.lo, prep.hi, dtype=np.int64)}
     for j, name in enumerate(plan.columns.names):
-        cols[name] = plan.table[prep.lo : prep.hi, j]
+        cols[name] = prep.grid[:, j]
     cols["status"] = status
-    cols["message"] = message
+    cols["message"] = message if noted else None  # None: no run has a message
     cols["t_final"] = t
     names = plan.names
     for k, s in enumerate(names["q"]):
@@ -371,3 +487,33 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
     for name in plan.expressions:
         cols[name] = outs[name]
     return cols
+
+
+def _arrow(plan: Plan, cols: dict) -> Any:
+    """The chunk's columns as an Arrow table of :meth:`Plan.schema` (the status codes
+    become a dictionary column: no string per run is converted)."""
+    import pyarrow as pa
+
+    names = pa.array(RUN_STATUSES, type=pa.string())
+    cols["status"] = pa.DictionaryArray.from_arrays(cols["status"], names)
+    if cols["message"] is None:
+        cols["message"] = pa.nulls(len(cols["status"]), pa.string())
+    return pa.table(cols, schema=plan.schema())
+
+
+def chunk_table(plan: Plan, index: int, lo: int, grid: np.ndarray) -> Any:
+    """The Arrow table of chunk ``index``, the runs ``lo:lo + len(grid)`` with grid rows
+    ``grid``: checked and prepared, run by the C loop, tabled.  A chunk that cannot
+    allocate the loop's work arrays becomes ``"failed"`` rows."""
+    prep = prepare(plan, index, lo, grid)
+    try:
+        info, error = run_chunk(plan.source, prep.chunk, plan.loop), None
+    except MemoryError as exc:
+        info, error = None, f"chunk {index}: {exc}"
+    return _arrow(plan, finish(plan, prep, info, error))
+
+
+def failed_table(plan: Plan, index: int, lo: int, grid: np.ndarray, error: str) -> Any:
+    """The table of a chunk that could not run: its runs that pass the checks are
+    ``"failed"`` with ``error``, the others ``"invalid"`` as always."""
+    return _arrow(plan, finish(plan, prepare(plan, index, lo, grid), None, error))

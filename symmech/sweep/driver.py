@@ -40,7 +40,7 @@ from symmech.simulate.csim import INFO_HEAD, library, options_vector
 from symmech.simulate.hybrid import Options
 from symmech.simulate.run import CONTACT_MODES, system_for
 from symmech.simulate.system import Functions, SimulationError
-from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, RUN_STATUSES, Plan
+from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
 from symmech.sweep.grid import read_grid, resolve_columns
 from symmech.sweep.runner import Progress, run_dask, run_local
 from symmech.sweep.store import Store
@@ -116,9 +116,9 @@ def _loop(
     return opts, LoopOptions(t0=t0f, method=index, vector=vec, width=width)
 
 
-def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, Any]:
-    """Each expression (a string, parsed safely, or a sympy expression) in t, the
-    coordinates, velocities and parameters, as a NumPy function of them (in that order)."""
+def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, sp.Expr]:
+    """Each expression (a string, parsed safely, or a sympy expression), checked to be in
+    t, the coordinates, velocities and parameters only."""
     if not given:
         return {}
     if not isinstance(given, Mapping):
@@ -144,11 +144,13 @@ def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, Any
                 f"expressions[{name!r}] uses {unknown}: only t, the coordinates, velocities"
                 f" and parameters {sorted(allowed)}"
             )
-        out[name] = sp.lambdify(args, e, modules="numpy")
+        out[name] = e
     return out
 
 
-def _fingerprint(plan: Plan, chunk: int, expressions: Mapping[str, Any] | None) -> str:
+def _fingerprint(
+    plan: Plan, table: np.ndarray, chunk: int, expressions: Mapping[str, Any] | None
+) -> str:
     digest = hashlib.sha256()
     parts = [
         plan.source.key,
@@ -159,27 +161,13 @@ def _fingerprint(plan: Plan, chunk: int, expressions: Mapping[str, Any] | None) 
         repr(plan.outputs),
         repr(sorted((k, str(v)) for k, v in (expressions or {}).items())),
         repr(chunk),
-        repr(plan.runs),
+        repr(table.shape[0]),
     ]
     for part in parts:
         digest.update(part.encode() + b"\0")
-    for array in (plan.table, plan.base_q, plan.base_v, plan.loop.vector):
+    for array in (table, plan.base_q, plan.base_v, plan.loop.vector):
         digest.update(np.ascontiguousarray(array, dtype=np.float64).tobytes())
     return digest.hexdigest()
-
-
-def _schema(plan: Plan) -> Any:
-    import pyarrow as pa
-
-    ints = {"steps", *(c for c in FIXED_COLUMNS if c.startswith("n_"))}
-    fields = [pa.field("run", pa.int64())]
-    for name in plan.column_names():
-        if name == "status":  # categorical: names of RUN_STATUSES
-            kind = pa.dictionary(pa.int8(), pa.string())
-        else:
-            kind = pa.string() if name == "message" else pa.float64()
-        fields.append(pa.field(name, pa.int64() if name in ints else kind))
-    return pa.schema(fields)
 
 
 def sweep(
@@ -290,10 +278,9 @@ def sweep(
     lib = library(system)
     plan = Plan(
         scene=scene,
-        system=system,
-        parameters_of=lib.parameters,
+        free_code=system.free.code,
+        layout=lib.spec.parameter_layout,
         columns=columns,
-        table=table,
         base_params=base_params,
         base_q=base_q,
         base_v=base_v,
@@ -303,17 +290,19 @@ def sweep(
         outputs=tuple(outputs),
         energy_conserved=fns.energy_conserved,
         expressions=exprs,
-    )
-    return _execute(plan, client, chunk, threads, store, progress, expressions)
+        strategy=strategy,
+        definitions=dict(definitions or {}),
+    ).attach(system)
+    return _execute(plan, table, client, chunk, threads, store, progress, expressions)
 
 
 def _execute(
-    plan: Plan, client: Any, chunk: int | None, threads: int, store: Any, progress: Any,
-    expressions: Any,
+    plan: Plan, table: np.ndarray, client: Any, chunk: int | None, threads: int, store: Any,
+    progress: Any, expressions: Any,
 ) -> Any:  # fmt: skip
     import pyarrow as pa
 
-    N = plan.runs
+    N = table.shape[0]
     workers = threads
     if client is not None:
         workers = max(1, sum(client.nthreads().values()))
@@ -322,8 +311,8 @@ def _execute(
     if chunk is None:
         chunk = max(1, min(MAX_CHUNK, -(-N // (4 * workers))))
     chunk = _positive_int(chunk, "chunk")
-    fingerprint = _fingerprint(plan, chunk, expressions)
-    schema = _schema(plan)
+    fingerprint = _fingerprint(plan, table, chunk, expressions)
+    schema = plan.schema()
     chunks = [(k, lo, min(lo + chunk, N)) for k, lo in enumerate(range(0, N, chunk))]
     tables: dict[int, Any] = {}
     saver = None
@@ -333,12 +322,7 @@ def _execute(
         chunks = [c for c in chunks if c[0] not in done]
     bar = Progress(sum(hi - lo for _, lo, hi in chunks), progress)
 
-    names = pa.array(RUN_STATUSES, type=pa.string())
-
-    def sink(k: int, cols: dict) -> None:
-        # the status codes become a dictionary column: no string per run is converted
-        cols["status"] = pa.DictionaryArray.from_arrays(cols["status"], names)
-        t = pa.table(cols, schema=schema)
+    def sink(k: int, t: Any) -> None:
         if saver is not None:
             saver.write(k, t)
         else:
@@ -347,9 +331,9 @@ def _execute(
 
     try:
         if client is None:
-            run_local(plan, chunks, threads, sink)
+            run_local(plan, table, chunks, threads, sink)
         else:
-            run_dask(plan, chunks, client, 2 * workers, sink, fingerprint[:16])
+            run_dask(plan, table, chunks, client, 2 * workers, sink, fingerprint[:16])
     finally:
         bar.close()
     full = saver.read(schema) if saver is not None else pa.concat_tables(

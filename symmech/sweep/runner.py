@@ -1,19 +1,19 @@
 """Running a sweep's chunks: in local threads, or as Dask tasks on a cluster.
 
-Both routes take the chunks of a :class:`~symmech.sweep.chunks.Plan` and hand each finished
-chunk's table to a ``sink`` (which keeps it or writes it to the store) in the order they
-finish; at most ``window`` chunks are prepared and not yet finished at any time, so memory
-stays flat however long the sweep.
+Both routes run :func:`~symmech.sweep.chunks.chunk_table` for each chunk (check, run the C
+loop, table: the whole life of the chunk where it runs) and hand each finished chunk's
+Arrow table to a ``sink`` (which keeps it or writes it to the store) in the order they
+finish; at most ``window`` chunks are in flight at any time, so memory stays flat however
+long the sweep.
 
-* Local: a pool of threads; each prepares its chunk (Python), runs it through
-  :func:`~symmech.sweep.worker.run_chunk` (the C loop, which releases the GIL) and tables
-  it.  A chunk that cannot allocate the loop's work arrays becomes ``"failed"`` rows.
-* Dask: the client prepares each chunk and submits
-  :func:`~symmech.sweep.worker.run_chunk` with the library source, scattered once to every
-  worker (each worker process compiles or loads it once).  A task that raises, or whose
-  workers keep dying (Dask's ``KilledWorker``), becomes ``"failed"`` rows naming the error;
-  a worker lost mid-sweep costs only the chunks it was running (Dask resubmits them), never
-  a finished one (the client holds those).
+* Local: a pool of threads (the C loop releases the GIL).
+* Dask: the plan is scattered once to every worker (it pickles to the scene, the generated
+  source and the options; each worker process compiles or loads the code once) and each
+  chunk is a task taking its grid rows.  The client only collects tables, so its work does
+  not grow with the number of workers.  A task that raises, or whose workers keep dying
+  (Dask's ``KilledWorker``), becomes ``"failed"`` rows naming the error; a worker lost
+  mid-sweep costs only the chunks it was running (Dask resubmits them), never a finished
+  one (the client holds those).
 """
 
 from __future__ import annotations
@@ -25,13 +25,14 @@ from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from typing import Any, TextIO
 
-from symmech.sweep.chunks import Plan, finish, prepare
-from symmech.sweep.worker import run_chunk
+import numpy as np
+
+from symmech.sweep.chunks import Plan, chunk_table, failed_table
 
 __all__ = ["Progress", "run_dask", "run_local"]
 
 Chunk = tuple[int, int, int]  # (index, lo, hi)
-Sink = Callable[[int, dict], None]
+Sink = Callable[[int, Any], None]  # (chunk index, its Arrow table)
 
 
 class Progress:
@@ -82,50 +83,59 @@ class Progress:
             self.stream.flush()
 
 
-def _local_task(plan: Plan, chunk: Chunk) -> tuple[int, dict]:
-    k, lo, hi = chunk
-    prep = prepare(plan, k, lo, hi)
-    try:
-        info, error = run_chunk(plan.source, prep.chunk, plan.loop), None
-    except MemoryError as exc:
-        info, error = None, f"chunk {k}: {exc}"
-    return k, finish(plan, prep, info, error)
-
-
-def run_local(plan: Plan, chunks: Iterable[Chunk], threads: int, sink: Sink) -> None:
-    """Run ``chunks`` in ``threads`` threads, at most ``2 threads`` in flight."""
+def run_local(
+    plan: Plan, grid: np.ndarray, chunks: Iterable[Chunk], threads: int, sink: Sink
+) -> None:
+    """Run ``chunks`` of the ``grid``'s rows in ``threads`` threads, at most ``2 threads``
+    in flight."""
     todo = iter(chunks)
     window = 2 * threads
     with ThreadPoolExecutor(max_workers=threads) as pool:
-        pending: set[Future] = set()
+        pending: dict[Future, int] = {}
 
         def fill() -> None:
             while len(pending) < window:
                 nxt = next(todo, None)
                 if nxt is None:
                     return
-                pending.add(pool.submit(_local_task, plan, nxt))
+                k, lo, hi = nxt
+                pending[pool.submit(chunk_table, plan, k, lo, grid[lo:hi])] = k
 
         fill()
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
             for fut in finished:
-                pending.discard(fut)
-                k, cols = fut.result()
-                sink(k, cols)
+                sink(pending.pop(fut), fut.result())
             fill()
 
 
+def _failure(result: Any) -> BaseException | None:
+    """The exception of a failed task as ``as_completed(raise_errors=False)`` yields it
+    (an error: (type, exception, traceback); cancelled: the exception), else None."""
+    if isinstance(result, BaseException):
+        return result
+    if isinstance(result, tuple) and len(result) == 3 and isinstance(result[1], BaseException):
+        return result[1]
+    return None
+
+
 def run_dask(
-    plan: Plan, chunks: Iterable[Chunk], client: Any, window: int, sink: Sink, tag: str
+    plan: Plan,
+    grid: np.ndarray,
+    chunks: Iterable[Chunk],
+    client: Any,
+    window: int,
+    sink: Sink,
+    tag: str,
 ) -> None:
-    """Run ``chunks`` as Dask tasks on ``client``'s cluster, at most ``window`` in flight.
-    ``tag`` makes the task keys of this sweep (``symmech-sweep-<tag>-<chunk>``)."""
+    """Run ``chunks`` of the ``grid``'s rows as Dask tasks on ``client``'s cluster, at
+    most ``window`` in flight.  ``tag`` makes the task keys of this sweep
+    (``symmech-sweep-<tag>-<chunk>``)."""
     from distributed import as_completed
 
-    source = client.scatter(plan.source, broadcast=True, hash=False)
+    shared = client.scatter(plan, broadcast=True, hash=False)
     todo = iter(chunks)
-    preps: dict[str, Any] = {}
+    spans: dict[str, Chunk] = {}
     # results are fetched by the client's event loop as they complete (no blocking
     # ``result()`` round trip per chunk from this thread); a failed chunk yields its
     # exception instead of raising
@@ -136,10 +146,9 @@ def run_dask(
         if nxt is None:
             return False
         k, lo, hi = nxt
-        prep = prepare(plan, k, lo, hi)
         key = f"symmech-sweep-{tag}-{k}"
-        fut = client.submit(run_chunk, source, prep.chunk, plan.loop, key=key, pure=False)
-        preps[fut.key] = prep
+        fut = client.submit(chunk_table, shared, k, lo, grid[lo:hi], key=key, pure=False)
+        spans[fut.key] = nxt
         queue.add(fut)
         return True
 
@@ -147,13 +156,15 @@ def run_dask(
         if not submit():
             break
     for fut, result in queue:
-        prep = preps.pop(fut.key)
-        if fut.status == "finished":
-            info, error = result, None
-        else:  # "error": (type, exception, traceback); "cancelled": the exception
-            exc = result[1] if isinstance(result, tuple) else result
-            info = None
-            error = f"chunk {prep.index} failed on the cluster: {type(exc).__name__}: {exc}"
+        k, lo, hi = spans.pop(fut.key)
+        # what came back decides, not ``fut.status``: a worker that dies after its result
+        # was fetched sends the future back to "pending" (Dask would recompute it)
+        exc = _failure(result)
+        if exc is None:
+            table = result
+        else:
+            error = f"chunk {k} failed on the cluster: {type(exc).__name__}: {exc}"
+            table = failed_table(plan, k, lo, grid[lo:hi], error)
         fut.release()
-        sink(prep.index, finish(plan, prep, info, error))
+        sink(k, table)
         submit()
