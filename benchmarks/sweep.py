@@ -26,7 +26,11 @@ local parallel efficiency >= 80% on 2 cores, Dask overhead < 10% of run time at 
 10^4 runs.  Memory: the resident set size of each Dask worker after a sweep of N runs and
 after one of ``--grow`` x N runs (flat if the results are streamed, not held).  Load
 independent: the share of a 1-thread sweep's CPU time spent outside the C loop (Python,
-holding the GIL), from CPU clocks, and the Amdahl bound it sets on the local efficiency.
+holding the GIL), from CPU clocks, and the Amdahl bound it sets on the local efficiency;
+and, per route, the CPU time of every process it uses (on Dask: the client with the
+scheduler it hosts, the workers and their nannies) beyond the C loop's, as a share of the
+C loop's (the overhead on an otherwise idle machine; on a real cluster the client's and
+scheduler's share leaves the workers' cores).
 ``--big N`` also runs an N-run ellipse sweep locally and on the cluster, reports both
 times and whether the tables are identical (bit for bit).
 
