@@ -293,6 +293,7 @@ def sweep(
         strategy=strategy,
         definitions=dict(definitions or {}),
     ).attach(system)
+    plan.expression_functions()  # built here once, so a bad expression fails before any run
     return _execute(plan, table, client, chunk, threads, store, progress, expressions)
 
 
