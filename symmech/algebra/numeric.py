@@ -27,8 +27,10 @@ from __future__ import annotations
 
 import cmath
 import math
+from collections import OrderedDict
 from collections.abc import Mapping, Sequence
-from typing import Any
+from functools import lru_cache
+from typing import Any, ClassVar
 
 import mpmath
 import numpy as np
@@ -101,7 +103,7 @@ def _eval(expr: sp.Basic, env: Mapping, memo: dict) -> complex:
         return hit
     value = env.get(expr)
     if value is not None:
-        val = complex(value)
+        val = _complex(value)
     elif expr.is_Number or expr.is_NumberSymbol or expr is sp.zoo:
         if expr in _NOT_FINITE:
             raise EvaluationError(_INFINITE)
@@ -127,6 +129,21 @@ def _eval(expr: sp.Basic, env: Mapping, memo: dict) -> complex:
         raise EvaluationError("is not finite in float64 (an overflow or a division by zero)")
     memo[expr] = val
     return val
+
+
+def _complex(value: Any) -> complex:
+    """``complex(value)``; for a sympy rational the same number without the real and
+    imaginary part functions sympy's ``__complex__`` builds (a real 15-digit ``evalf``:
+    note that this is not ``float(value)``, which rounds differently), remembered for the
+    next evaluation at the same sample point."""
+    if isinstance(value, sp.Rational):
+        return _complex_rational(value)
+    return complex(value)
+
+
+@lru_cache(maxsize=4096)
+def _complex_rational(value: sp.Rational) -> complex:
+    return complex(float(value.evalf()), 0.0)
 
 
 def _evalf(expr: sp.Basic, env: Mapping, digits: int) -> sp.Expr:
@@ -173,11 +190,17 @@ def evaluate_matrix(M: sp.MatrixBase, point: Mapping) -> np.ndarray:
     """Every entry of ``M`` at ``point``, as a complex numpy array (shared subtrees once).
 
     Raises :class:`EvaluationError` with the entry's index when an entry has no finite
-    float64 value.
+    float64 value.  The entries are evaluated by their :class:`_Program` (the same
+    operations, in the same order, as the tree walk), kept for the next point with the
+    same atoms; trees nested too deeply for it are walked.
     """
     env: dict = dict(point)
-    memo: dict = {}
     out = np.empty((M.rows, M.cols), dtype=complex)
+    program = _Program.of(M, env)
+    if program is not None:
+        program.run(env, out)
+        return out
+    memo: dict = {}
     for i in range(M.rows):
         for j in range(M.cols):
             try:
@@ -187,6 +210,152 @@ def evaluate_matrix(M: sp.MatrixBase, point: Mapping) -> np.ndarray:
             except _ARITHMETIC as exc:
                 raise EvaluationError(_reason(exc), (i, j)) from None
     return out
+
+
+# operations of a _Program
+_LOAD, _CONST, _ADD, _MUL, _POWI, _POW, _FUNC, _ATAN2, _EVALF = range(9)
+
+
+class _Program:
+    """The entries of a matrix as a straight-line program for :func:`_eval`'s float64
+    arithmetic: one operation per distinct node, in the order the recursive walk of the
+    entries (row by row, shared subtrees once) first completes the nodes, each computing
+    what :func:`_eval` computes there from the values of the node's children.  Running it
+    at a point therefore gives the same numbers, and raises the same error at the same
+    node (reported for the entry whose walk first reached it), without the cost of the
+    walk (dictionary look-ups and calls per visited node).
+
+    A program depends on the matrix and on which atoms the point gives values to (they
+    are loaded, not walked into); :meth:`of` keeps the last few.  Trees deeper than
+    :data:`_MAX_DEPTH` frames of the walk get no program: the walk would run out of stack
+    (a RecursionError it reports as "nested too deeply") where a program would not.
+    """
+
+    _MAX_DEPTH: ClassVar[int] = 200
+    _cache: ClassVar[OrderedDict[tuple, _Program]] = OrderedDict()
+    _CACHE_SIZE: ClassVar[int] = 8
+
+    def __init__(self, ops: list[tuple], entries: list[tuple[int, int, int]]):
+        self.ops = ops  # (kind, entry index (i, j) of the walk reaching it first, data...)
+        self.entries = entries  # (i, j, slot of its value)
+
+    @classmethod
+    def of(cls, M: sp.MatrixBase, env: Mapping) -> _Program | None:
+        """The program of ``M`` for points with the atoms of ``env`` (None: walk)."""
+        if any(v is None for v in env.values()):
+            return None  # (the walk takes an atom given None as an atom without a value)
+        key = (M.rows, M.cols, tuple(e for row in M.tolist() for e in row), frozenset(env))
+        hit = cls._cache.get(key)
+        if hit is not None:
+            cls._cache.move_to_end(key)
+            return hit
+        program = cls._compile(M, env)
+        if program is not None:
+            cls._cache[key] = program
+            if len(cls._cache) > cls._CACHE_SIZE:
+                cls._cache.popitem(last=False)
+        return program
+
+    @classmethod
+    def _compile(cls, M: sp.MatrixBase, env: Mapping) -> _Program | None:
+        ops: list[tuple] = []
+        slots: dict[sp.Basic, int] = {}
+        too_deep = False
+
+        def visit(expr: sp.Basic, where: tuple[int, int], depth: int) -> int:
+            # mirrors _eval: a node's operation follows those of its children
+            nonlocal too_deep
+            hit = slots.get(expr)
+            if hit is not None:
+                return hit
+            if depth > cls._MAX_DEPTH:
+                too_deep = True
+                return -1
+            if expr in env:
+                op: tuple = (_LOAD, where, expr)
+            elif expr.is_Number or expr.is_NumberSymbol or expr is sp.zoo:
+                try:
+                    if expr in _NOT_FINITE:
+                        raise EvaluationError(_INFINITE)
+                    op = (_CONST, where, complex(expr))
+                except Exception as exc:  # raised when the walk would reach it
+                    op = (_CONST, where, exc)
+            elif expr.is_Add:  # sum(generator): two frames per level
+                op = (_ADD, where, [visit(a, where, depth + 2) for a in expr.args])
+            elif expr.is_Mul:
+                op = (_MUL, where, [visit(a, where, depth + 1) for a in expr.args])
+            elif expr.is_Pow:
+                base = visit(expr.base, where, depth + 1)
+                e = expr.exp
+                if e.is_Integer:
+                    op = (_POWI, where, base, int(e))
+                else:
+                    op = (_POW, where, base, visit(e, where, depth + 1))
+            elif type(expr) in _FUNCS:
+                op = (_FUNC, where, _FUNCS[type(expr)], visit(expr.args[0], where, depth + 1))
+            elif isinstance(expr, sp.atan2):
+                y, x = (visit(a, where, depth + 2) for a in expr.args)
+                op = (_ATAN2, where, y, x)
+            else:
+                op = (_EVALF, where, expr)
+            if too_deep:
+                return -1
+            slots[expr] = len(ops)
+            ops.append(op)
+            return len(ops) - 1
+
+        entries = []
+        for i in range(M.rows):
+            for j in range(M.cols):
+                slot = visit(M[i, j], (i, j), 1)
+                if too_deep:
+                    return None
+                entries.append((i, j, slot))
+        return cls(ops, entries)
+
+    def run(self, env: Mapping, out: np.ndarray) -> None:
+        """Fill ``out`` with the entries at the point ``env``; raises as
+        :func:`evaluate_matrix` does."""
+        vals: list[complex] = []
+        push = vals.append
+        isfinite = cmath.isfinite
+        op: tuple = ()
+        try:
+            for op in self.ops:
+                kind = op[0]
+                if kind == _MUL:
+                    val = 1 + 0j
+                    for a in op[2]:
+                        val *= vals[a]
+                elif kind == _ADD:
+                    val = sum([vals[a] for a in op[2]], 0j)
+                elif kind == _POWI:
+                    val = vals[op[2]] ** op[3]
+                elif kind == _FUNC:
+                    val = op[2](vals[op[3]])
+                elif kind == _LOAD:
+                    val = _complex(env[op[2]])
+                elif kind == _CONST:
+                    val = op[2]
+                    if isinstance(val, Exception):
+                        raise val
+                elif kind == _POW:
+                    val = vals[op[2]] ** vals[op[3]]
+                elif kind == _ATAN2:
+                    val = complex(math.atan2(vals[op[2]].real, vals[op[3]].real))
+                else:
+                    val = complex(_evalf(op[2], env, 17))
+                if not isfinite(val):
+                    raise EvaluationError(
+                        "is not finite in float64 (an overflow or a division by zero)"
+                    )
+                push(val)
+        except EvaluationError as exc:
+            raise EvaluationError(exc.reason, op[1]) from None
+        except _ARITHMETIC as exc:
+            raise EvaluationError(_reason(exc), op[1]) from None
+        for i, j, slot in self.entries:
+            out[i, j] = vals[slot]
 
 
 # -- mpmath --------------------------------------------------------------------------------
