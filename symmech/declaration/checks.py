@@ -31,6 +31,7 @@ from symmech.algebra.numeric import (
 )
 from symmech.algebra.rank import generic_rank
 from symmech.algebra.sampling import atom_key, sample_points
+from symmech.algebra.walk import atoms, free_symbols
 from symmech.algebra.zero import is_zero
 from symmech.declaration.admissible import NON_SMOOTH, expression_problems
 from symmech.declaration.definiteness import Verdict, definiteness
@@ -85,7 +86,7 @@ def _entries(expr: sp.Basic | sp.MatrixBase) -> list[sp.Basic]:
 
 
 def _non_smooth(expr: sp.Basic | sp.MatrixBase) -> list[str]:
-    applied = set().union(*[e.atoms(sp.Function, sp.Max, sp.Min) for e in _entries(expr)])
+    applied = set().union(*[atoms(e, (sp.Function, sp.Max, sp.Min)) for e in _entries(expr)])
     return sorted({type(f).__name__ for f in applied if isinstance(f, NON_SMOOTH)})
 
 
@@ -183,7 +184,8 @@ class Field:
 
     @property
     def symbols(self) -> set[sp.Symbol]:
-        return set().union(*[e.free_symbols for e in _entries(self.value)])
+        memo: dict[sp.Basic, frozenset] = {}
+        return set().union(*[free_symbols(e, memo) for e in _entries(self.value)])
 
 
 @dataclass(frozen=True)

@@ -20,12 +20,13 @@ at sample points, so its cost stays linear in the size of the input.
 
 from __future__ import annotations
 
-from collections import Counter, defaultdict
+from collections import defaultdict
 from collections.abc import Callable, Mapping, Sequence
 from fractions import Fraction
 
 import sympy as sp
 
+from symmech.algebra.canonical import add, mul
 from symmech.algebra.zero import is_zero
 
 __all__ = [
@@ -69,7 +70,7 @@ def _int(x: Fraction | int | sp.Expr) -> Fraction | int | sp.Expr:
 def _split(expr: sp.Expr) -> _Term:
     if expr.is_Mul:
         num = [f for f in expr.args if f.is_Number]
-        return _num(sp.Mul(*num)), tuple(f for f in expr.args if not f.is_Number)
+        return _num(mul(*num)), tuple(f for f in expr.args if not f.is_Number)
     if expr.is_Number:
         return _num(expr), ()
     return 1, (expr,)
@@ -94,7 +95,7 @@ def linear_coefficients(expr: sp.Expr, index: dict[sp.Symbol, int]) -> dict[int,
         dep = [f for f in expr.args if _has(f, vset)]
         if len(dep) != 1:
             raise NotQuadraticError(expr, "not linear in the velocities")
-        num, factors = _split(sp.Mul(*[f for f in expr.args if not _has(f, vset)]))
+        num, factors = _split(mul(*[f for f in expr.args if not _has(f, vset)]))
         inner = linear_coefficients(dep[0], index)
         return {j: [(num * n2, factors + f2) for n2, f2 in terms] for j, terms in inner.items()}
     if _has(expr, vset):
@@ -138,7 +139,7 @@ def _hessian(expr: sp.Expr, index: dict[sp.Symbol, int], out: dict, coef: _Term)
         raise NotQuadraticError(expr, "not a quadratic form in the velocities")
     if expr.is_Mul:
         dep = [f for f in expr.args if _has(f, vset)]
-        num, factors = _split(sp.Mul(*[f for f in expr.args if not _has(f, vset)]))
+        num, factors = _split(mul(*[f for f in expr.args if not _has(f, vset)]))
         c = (_int(coef[0] * num), coef[1] + factors)
         if len(dep) == 1:
             _hessian(dep[0], index, out, c)
@@ -162,17 +163,23 @@ def group_by_factor(terms: Sequence[_Term], q: frozenset) -> sp.Expr:
     """
     groups: dict[tuple, list[tuple[sp.Expr, list[sp.Expr]]]] = defaultdict(list)
     depends: dict[sp.Expr, bool] = {}
-
-    def on_q(f: sp.Expr) -> bool:
-        hit = depends.get(f)
-        if hit is None:
-            hit = depends[f] = not q.isdisjoint(f.free_symbols)
-        return hit
-
     for num, factors in terms:
-        dep = tuple(sorted((f for f in factors if on_q(f)), key=hash))
-        groups[dep].append((num, [f for f in factors if not on_q(f)]))
-    return sp.Add(*[_common_factor_sum(items, dep) for dep, items in groups.items()])
+        on: list[sp.Expr] = []
+        off: list[sp.Expr] = []
+        for f in factors:
+            hit = depends.get(f)
+            if hit is None:
+                hit = depends[f] = not q.isdisjoint(f.free_symbols)
+            (on if hit else off).append(f)
+        groups[tuple(sorted(on, key=hash))].append((num, off))
+    return add(*[_common_factor_sum(items, dep) for dep, items in groups.items()])
+
+
+def _multiset(factors: Sequence[sp.Expr]) -> dict[sp.Expr, int]:
+    counts: dict[sp.Expr, int] = {}
+    for f in factors:
+        counts[f] = counts.get(f, 0) + 1
+    return counts
 
 
 def _common_factor_sum(items: list[tuple[sp.Expr, list[sp.Expr]]], dep: tuple = ()) -> sp.Expr:
@@ -183,24 +190,33 @@ def _common_factor_sum(items: list[tuple[sp.Expr, list[sp.Expr]]], dep: tuple = 
     if len(items) == 1:
         num, factors = items[0]
         return _times(num, [*factors, *dep])
-    common = Counter(items[0][1])
+    common = _multiset(items[0][1])  # the multiset intersection of the items' factors
     for _, factors in items[1:]:
-        common &= Counter(factors)
+        other = _multiset(factors)
+        common = {f: min(k, other[f]) for f, k in common.items() if f in other}
         if not common:
             break
     rest = []
     for num, factors in items:
-        left = Counter(factors)
-        left.subtract(common)
-        rest.append(_times(num, list(left.elements())))
-    return sp.Mul(*common.elements(), sp.Add(*rest), *dep)
+        kept = factors
+        if common:
+            left, kept = dict(common), []
+            for f in factors:
+                k = left.get(f)
+                if k:
+                    left[f] = k - 1
+                else:
+                    kept.append(f)
+        rest.append(_times(num, kept))
+    return mul(*[f for f, k in common.items() for _ in range(k)], add(*rest), *dep)
 
 
 def _times(num: Fraction | sp.Expr, factors: list[sp.Expr]) -> sp.Expr:
     if num == 1:
-        return sp.Mul(*factors)
-    coef = sp.Rational(num.numerator, num.denominator) if isinstance(num, Fraction) else num
-    return sp.Mul(coef, *factors)
+        return mul(*factors)
+    exact = isinstance(num, Fraction | int)
+    coef = sp.Rational(num.numerator, num.denominator) if exact else num
+    return mul(coef, *factors)
 
 
 def metric_from_kinetic_energy(

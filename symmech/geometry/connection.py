@@ -33,6 +33,7 @@ from collections.abc import Sequence
 
 import sympy as sp
 
+from symmech.algebra.canonical import add, keep_coeff, mul
 from symmech.algebra.field import field_solve
 from symmech.algebra.simplification import Level, check_level, polish, simplify_all, tidy
 from symmech.geometry.derivatives import Derivative
@@ -246,13 +247,17 @@ def _forcing_coordinates(
     ``+1/2 d v^i v^j`` (counted for (i, j) and (j, i)) into f_a, and ``-d v^a v^j`` into f_i,
     ``-d v^a v^i`` into f_j.  Terms are grouped by velocity monomial, so each f_k reads
     ``sum (-Gamma_kij) v^i v^j`` with one coefficient per monomial.  Cost: the number of
-    non-zero metric derivatives, not n^3.
+    non-zero metric derivatives, not n^3.  The derivatives are scattered as their terms
+    (:meth:`Derivative.partial_terms`), each scaled as sympy scales a sum, and summed
+    once per coefficient: the same expressions as summing the scaled derivatives.
     """
     n = len(q)
     acc: list[dict[tuple[int, int], list[sp.Expr]]] = [defaultdict(list) for _ in range(n)]
+    half, minus = sp.S.Half, sp.S.NegativeOne
 
-    def add(k: int, i: int, j: int, term: sp.Expr) -> None:
-        acc[k][(i, j) if i <= j else (j, i)].append(term)
+    def scatter(k: int, i: int, j: int, c: sp.Rational, terms: list[sp.Expr]) -> None:
+        # c * d, as sympy distributes a rational over the terms of d, summed later
+        acc[k][(i, j) if i <= j else (j, i)].extend(keep_coeff(c, t) for t in terms)
 
     for i in range(n):
         for j in range(i, n):
@@ -263,18 +268,27 @@ def _forcing_coordinates(
             for a in range(n):
                 if q[a] not in fs:
                     continue
-                d = D(gij, a)
-                if d == 0:
+                d = D.partial_terms(gij, a)  # d g_ij / d q^a, as its terms
+                if not d:
                     continue
                 if i == j:
-                    add(a, i, i, d / 2)
-                    add(i, a, i, -d)
+                    scatter(a, i, i, half, d)
+                    scatter(i, a, i, minus, d)
                 else:
-                    add(a, i, j, d)
-                    add(i, a, j, -d)
-                    add(j, a, i, -d)
+                    scatter(a, i, j, sp.S.One, d)
+                    scatter(i, a, j, minus, d)
+                    scatter(j, a, i, minus, d)
     rows = []
     for k in range(n):
-        terms = [sp.Mul(sp.Add(*coefs), v[i], v[j]) for (i, j), coefs in acc[k].items()]
-        rows.append(tidy(sp.Add(*terms) - D(sp.sympify(V), k), level))
+        terms = [mul(add(*coefs), v[i], v[j]) for (i, j), coefs in acc[k].items()]
+        dV = D(sp.sympify(V), k)
+        rows.append(tidy(_minus(add(*terms), dV), level))
     return sp.Matrix(rows)
+
+
+def _minus(x: sp.Expr, y: sp.Expr) -> sp.Expr:
+    """``x - y`` as the operator computes it (``sympy.Add(x, -y)``; numbers by number
+    arithmetic)."""
+    if x.is_Number and y.is_Number:
+        return x - y
+    return add(x, mul(sp.S.NegativeOne, y) if y.is_Add else -y)

@@ -1,0 +1,49 @@
+"""Walks of an expression that visit each distinct subtree once.
+
+sympy's ``free_symbols`` and ``atoms`` walk the expression as a tree: a subtree shared by
+many parents (the velocity of a link, reused in the kinetic energy of every link after
+it) is walked once per parent.  These walks remember what they have seen, so their cost
+is the number of distinct subexpressions; they return what sympy's return.
+"""
+
+from __future__ import annotations
+
+import sympy as sp
+
+__all__ = ["atoms", "free_symbols"]
+
+# sympy's free_symbols of a node that binds no variables: the union over its arguments
+_UNION_OF_ARGS = sp.Basic.free_symbols
+
+
+def free_symbols(expr: sp.Basic, memo: dict[sp.Basic, frozenset] | None = None) -> frozenset:
+    """``expr.free_symbols`` as a frozenset; ``memo`` (expression -> its set) may be kept
+    by the caller for the next expressions.  Nodes whose class defines its own free
+    symbols (symbols, derivatives, integrals, functions) are asked for them."""
+    if memo is None:
+        memo = {}
+    hit = memo.get(expr)
+    if hit is None:
+        if expr.args and type(expr).free_symbols is _UNION_OF_ARGS:
+            hit = frozenset().union(*[free_symbols(a, memo) for a in expr.args])
+        else:
+            hit = frozenset(expr.free_symbols)
+        memo[expr] = hit
+    return hit
+
+
+def atoms(expr: sp.Basic, types: tuple[type, ...]) -> set[sp.Basic]:
+    """``expr.atoms(*types)``: the subexpressions of ``expr`` (itself included) that are
+    instances of ``types``."""
+    out: set[sp.Basic] = set()
+    seen: set[sp.Basic] = set()
+    stack = [expr]
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if isinstance(e, types):
+            out.add(e)
+        stack.extend(e.args)
+    return out
