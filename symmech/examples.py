@@ -161,15 +161,18 @@ def pendulum_on_cart(n: int) -> Scene:
     m = sp.symbols(f"m0:{n + 1}", positive=True)
     l = sp.symbols(f"l0:{n}", positive=True)
     g = sp.Symbol("g", positive=True)
-    T = m[0] * qd[0] ** 2 / 2
-    V = sp.S.Zero
-    vx, vy, height = qd[0], sp.S.Zero, sp.S.Zero
+    half = sp.Rational(1, 2)
+    # the terms of each sum collected, the sum built once (not grown term by term)
+    kinetic, potential = [sp.Mul(half, m[0], qd[0] ** 2)], []
+    vx, vy, height = [qd[0]], [], []  # velocity and height of the current link's mass
     for i in range(n):
-        vx += l[i] * sp.cos(q[i + 1]) * qd[i + 1]
-        vy += l[i] * sp.sin(q[i + 1]) * qd[i + 1]
-        height -= l[i] * sp.cos(q[i + 1])
-        T += m[i + 1] * (vx**2 + vy**2) / 2
-        V += m[i + 1] * g * height
+        c, s = sp.cos(q[i + 1]), sp.sin(q[i + 1])
+        vx.append(sp.Mul(l[i], c, qd[i + 1]))
+        vy.append(sp.Mul(l[i], s, qd[i + 1]))
+        height.append(sp.Mul(-1, l[i], c))
+        kinetic.append(sp.Mul(half, m[i + 1], sp.Add(sp.Add(*vx) ** 2, sp.Add(*vy) ** 2)))
+        potential.append(sp.Mul(m[i + 1], g, sp.Add(*height)))
+    T, V = sp.Add(*kinetic), sp.Add(*potential)
     return Scene(q, kinetic_energy=T, potential=V, name=f"pendulum_on_cart_{n}")
 
 
