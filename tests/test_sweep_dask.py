@@ -160,3 +160,38 @@ def test_cluster_store_resumes(client, tmp_path, monkeypatch):
     pd.testing.assert_frame_equal(
         first, sm.sweep(bouncing_ball(), grid, 2.0, **kw), check_exact=True
     )
+
+
+def test_constrained_and_time_dependent_scenes_on_the_cluster(client):
+    """What a worker loads from the plan serves every kind of scene: the rolling sphere
+    (its v0 projected onto D by the worker's own free-flight code, a run off D refused)
+    and a floor shaken by an arbitrary function of time given by ``definitions``."""
+    import sympy as sp
+
+    c = case("carnot_3_13")
+    v = list(c.v0)
+    grid = {"v0[0]": [v[0], v[0] + 1e-9, v[0] + 1.0]}
+    kw = {"params": c.params(), "q0": list(c.q0), "v0": v, "chunk": 2}
+    local = sm.sweep(c.scene(), grid, 0.5, threads=1, **kw)
+    remote = sm.sweep(c.scene(), grid, 0.5, client=client, **kw)
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+    assert remote["status"].tolist() == ["finished", "finished", "invalid"]
+
+    (y,) = sm.coordinates("y")
+    m, g = sp.symbols("m g", positive=True)
+    f = sp.Function("f")
+    wall = sm.Wall(y - f(sm.t), restitution=sp.Rational(1, 2), name="shaker")
+    shaker = sm.Scene((y,), metric=sp.Matrix([[m]]), potential=m * g * y, walls=[wall])
+    kw = {
+        "params": {"m": 1.0, "g": 9.81},
+        "v0": [0.0],
+        "definitions": {f(sm.t): sp.sin(3 * sm.t) / 10},
+        "chunk": 2,
+    }
+    grid = {"y0": [0.5, 1.0, 1.5]}
+    local = sm.sweep(shaker, grid, 3.0, threads=1, **kw)
+    remote = sm.sweep(shaker, grid, 3.0, client=client, **kw)
+    pd.testing.assert_frame_equal(local, remote, check_exact=True)
+    one = sm.simulate(shaker, [1.0], [0.0], 3.0, params=kw["params"], definitions=kw["definitions"])
+    assert remote.loc[1, "y_final"] == one.q[-1][0]
+    assert remote.loc[1, "n_impact"] == sum(e.kind == "impact" for e in one.events)
