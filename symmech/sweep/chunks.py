@@ -1,6 +1,6 @@
 """A sweep planned: the runs of each chunk checked and prepared, and their results tabled.
 
-:func:`prepare` turns the rows ``lo:hi`` of the grid into a
+:func:`prepare` turns a chunk (its grid rows, runs ``lo:lo + len(rows)``) into a
 :class:`~symmech.sweep.worker.ChunkInput`, checking every run as
 :func:`symmech.simulate.simulate` checks one (in the same order, with the same messages):
 finite initial state, the parameters (:func:`~symmech.simulate.system.check_parameters`:
