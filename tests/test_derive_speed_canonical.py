@@ -240,6 +240,26 @@ def test_compiled_evaluation_is_the_walk(seed: int) -> None:
     assert outcomes == {"value", "raised"}
 
 
+def test_compiled_evaluation_from_many_threads() -> None:
+    """The kept programs are shared by every thread (scenes may be declared in several
+    at once): more matrices than the cache keeps, evaluated concurrently, give the walk's
+    values."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    matrices = [
+        sp.Matrix([[sp.cos(x) ** k + m, x * y], [x * y, sp.sin(y) ** k + m]]) for k in range(20)
+    ]
+    point = {x: sp.Rational(1, 3), y: sp.Rational(-2, 7), m: sp.Rational(5, 2)}
+    expected = [_evaluated(_walk, M, point) for M in matrices]
+
+    def evaluate(k: int) -> tuple:
+        return _evaluated(numeric.evaluate_matrix, matrices[k % 20], point)
+
+    with ThreadPoolExecutor(8) as pool:
+        got = list(pool.map(evaluate, range(400)))
+    assert got == [expected[k % 20] for k in range(400)]
+
+
 def test_deep_trees_are_walked() -> None:
     e = x
     for k in range(300):

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import cmath
 import math
+import threading
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from functools import lru_cache
@@ -234,6 +235,8 @@ class _Program:
     _MAX_DEPTH: ClassVar[int] = 200
     _cache: ClassVar[OrderedDict[tuple, _Program]] = OrderedDict()
     _CACHE_SIZE: ClassVar[int] = 8
+    #: guards the cache (scenes may be declared in several threads at once)
+    _lock: ClassVar[threading.Lock] = threading.Lock()
 
     def __init__(self, ops: list[tuple], entries: list[tuple[int, int, int]]):
         self.ops = ops  # (kind, entry index (i, j) of the walk reaching it first, data...)
@@ -245,15 +248,17 @@ class _Program:
         if any(v is None for v in env.values()):
             return None  # (the walk takes an atom given None as an atom without a value)
         key = (M.rows, M.cols, tuple(e for row in M.tolist() for e in row), frozenset(env))
-        hit = cls._cache.get(key)
-        if hit is not None:
-            cls._cache.move_to_end(key)
-            return hit
+        with cls._lock:
+            hit = cls._cache.get(key)
+            if hit is not None:
+                cls._cache.move_to_end(key)
+                return hit
         program = cls._compile(M, env)
         if program is not None:
-            cls._cache[key] = program
-            if len(cls._cache) > cls._CACHE_SIZE:
-                cls._cache.popitem(last=False)
+            with cls._lock:
+                cls._cache[key] = program
+                while len(cls._cache) > cls._CACHE_SIZE:
+                    cls._cache.popitem(last=False)
         return program
 
     @classmethod
