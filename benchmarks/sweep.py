@@ -219,12 +219,23 @@ def main() -> None:
     ap.add_argument("--cases", default="bouncing_ball,ellipse_gravity")
     ap.add_argument("--big", type=int, default=0, help="also an N-run ellipse sweep, both routes")
     ap.add_argument("--repeat", type=int, default=3, help="runs per timed route (shortest kept)")
+    ap.add_argument(
+        "--no-profiler",
+        action="store_true",
+        help="the cluster's workers without Dask's statistical profiler",
+    )
     args = ap.parse_args()
     global REPEAT
     REPEAT = max(1, args.repeat)
 
     from distributed import Client, LocalCluster
 
+    if args.no_profiler:
+        import dask
+
+        # Dask's statistical profiler samples each worker thread every 10 ms; a documented
+        # setting for clusters of many short tasks turns it off
+        dask.config.set({"distributed.worker.profile.enabled": False})
     cores = os.cpu_count() or 1
     cluster = LocalCluster(
         n_workers=cores,
@@ -318,7 +329,10 @@ def main() -> None:
                 )
                 after_grow = _rss(client)
                 memory = [before, after_n, after_grow, t_grow]
-        print(f"sweep benchmark: {args.runs} runs per case, {cores} cores")
+        profiler = "off" if args.no_profiler else "on (Dask's default)"
+        print(
+            f"sweep benchmark: {args.runs} runs per case, {cores} cores, worker profiler {profiler}"
+        )
         print(
             f"{'case':16} {'route':44} {'runs/s':>9} {'us/run':>9} {'overhead':>9}"
             f" {'efficiency':>10} {'C batch/T':>9}"

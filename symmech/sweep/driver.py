@@ -340,4 +340,6 @@ def _execute(
     full = saver.read(schema) if saver is not None else pa.concat_tables(
         [tables[k] for k in sorted(tables)]
     )  # fmt: skip
-    return full.to_pandas().set_index("run")
+    # split_blocks: a column per block, not copied into 2-D blocks (the copy was most of
+    # the serial time at the end of a large sweep, with every worker idle)
+    return full.to_pandas(split_blocks=True).set_index("run")
