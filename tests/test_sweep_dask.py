@@ -54,8 +54,11 @@ def test_cluster_table_equals_local_table_bit_for_bit(client, ellipse):
     # another chunking on the cluster: still the same table
     again = sm.sweep(scene, grid, 3.0, chunk=40, client=client, **kw)
     pd.testing.assert_frame_equal(local, again, check_exact=True)
-    # every worker process compiled or loaded the library once, and holds only it
-    assert set(client.run(loaded_libraries).values()) == {1}
+    # a worker process that ran chunks compiled or loaded the library once, however many
+    # chunks and sweeps it ran, and holds only it (Dask may give every chunk to one
+    # worker while the other is still starting: a worker with none loaded none)
+    loaded = client.run(loaded_libraries).values()
+    assert set(loaded) <= {0, 1} and 1 in set(loaded)
 
 
 def test_the_client_only_collects_tables(client, ellipse, monkeypatch):
