@@ -37,6 +37,7 @@ is built about three times faster than by ``Mul``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import lru_cache
 from typing import Any
 
@@ -343,14 +344,11 @@ CHECKED_SYMPY = ("1.14",)
 FAST = _INTERNALS and ".".join(sp.__version__.split(".")[:2]) in CHECKED_SYMPY
 
 
-def mul(*args: sp.Expr) -> sp.Expr:
-    """``sympy.Mul(*args)``: by :func:`fast_mul` on a checked sympy (:data:`FAST`)."""
-    return fast_mul(*args) if FAST else Mul(*args)
-
-
-def add(*args: sp.Expr) -> sp.Expr:
-    """``sympy.Add(*args)``: by :func:`fast_add` on a checked sympy (:data:`FAST`)."""
-    return fast_add(*args) if FAST else Add(*args)
+#: ``sympy.Mul(*args)`` and ``sympy.Add(*args)``: :func:`fast_mul` and :func:`fast_add` on a
+#: checked sympy (:data:`FAST`), sympy's own constructors otherwise (chosen once, here:
+#: they are called for every product and sum of a derivation).
+mul: Callable[..., sp.Expr] = fast_mul if FAST else Mul
+add: Callable[..., sp.Expr] = fast_add if FAST else Add
 
 
 def keep_coeff(c: sp.Expr, term: sp.Expr) -> sp.Expr:

@@ -44,8 +44,7 @@ class Derivative:
 
     def free_symbols(self, expr: sp.Basic) -> frozenset:
         """``expr.free_symbols``, memoised (sympy recomputes it on every access)."""
-        fs = self._symbols.get(expr)
-        return fs if fs is not None else free_symbols(expr, self._symbols)
+        return free_symbols(expr, self._symbols)
 
     def partial(self, expr: sp.Expr, a: int) -> sp.Expr:
         """d expr / d q^a, zero without differentiating when q^a does not occur."""
