@@ -108,25 +108,12 @@ def _rss(client) -> list[float]:
 def _serial_share(scene, grid, t_end: float, kw: dict) -> float:
     """The share of a 1-thread sweep's CPU time spent outside the C loop (Python holding
     the GIL: checks, tables), from CPU clocks, so the machine's load does not enter."""
-    from symmech.sweep import chunks
-
-    spent = [0.0]
-    real = chunks.run_chunk
-
-    def timed(*args):
-        start = time.thread_time()
-        out = real(*args)
-        spent[0] += time.thread_time() - start
-        return out
-
-    chunks.run_chunk = timed
-    try:
-        start = time.process_time()
-        sm.sweep(scene, grid, t_end, threads=1, **kw)
-        total = time.process_time() - start
-    finally:
-        chunks.run_chunk = real
-    return (total - spent[0]) / total
+    _install_c_clock()
+    cpu, c_loop = _cpu_now()
+    sm.sweep(scene, grid, t_end, threads=1, **kw)
+    after = _cpu_now()
+    total = after[0] - cpu
+    return (total - (after[1] - c_loop)) / total
 
 
 def _dask_floor(client, scene, grid, t_end: float, kw: dict, chunk: int) -> float:
@@ -134,20 +121,21 @@ def _dask_floor(client, scene, grid, t_end: float, kw: dict, chunk: int) -> floa
     a sweep in chunks of ``chunk`` (captured from a 1-thread sweep), submitted at once
     with the library scattered, results gathered; no checks, no table.  What any route
     through Dask costs on this machine, whatever the sweep does around it."""
-    from symmech.sweep import chunks
+    from symmech.sweep import chunks, worker
 
     calls = []
-    real = chunks.run_chunk
+    real = worker.run_chunk  # the C loop itself, whatever clock wraps chunks.run_chunk
 
     def capture(*args):
         calls.append(args)
         return real(*args)
 
+    installed = chunks.run_chunk
     chunks.run_chunk = capture
     try:
         sm.sweep(scene, grid, t_end, threads=1, chunk=chunk, **kw)
     finally:
-        chunks.run_chunk = real
+        chunks.run_chunk = installed
     source = client.scatter(calls[0][0], broadcast=True, hash=False)
     client.gather([client.submit(real, source, c, o, pure=False) for _, c, o in calls[:2]])
 
