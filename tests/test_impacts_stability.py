@@ -54,6 +54,40 @@ def test_state_monomials_get_factored_coefficients():
         assert rel_err(f_plain(*args), exact) > 1e-6
 
 
+def test_many_symbols_take_the_gathered_route_and_stay_stable(monkeypatch):
+    """Over STABLE_FACTOR_SYMBOLS symbols nothing is factored as a whole, yet the
+    difference of nearly equal terms is still combined: (1 - x/(x+y)) S, with S a sum of
+    many symbols, becomes y S/(x + y); I + m (a^2 - b^2)^2 sin^2 + ... keeps its
+    factored coefficient of sin^2."""
+    from symmech.algebra import budget, stability
+
+    calls = []
+    real = stability._gathered
+    monkeypatch.setattr(
+        stability, "_gathered", lambda part, st: calls.append(part) or real(part, st)
+    )
+    extra = sp.symbols(f"s0:{budget.STABLE_FACTOR_SYMBOLS}", positive=True)
+    S = sp.Add(*extra)
+    out = stable_coefficient((1 - x / (x + y)) * S)
+    assert calls, "the expression did not take the gathered route"
+    assert sp.simplify(out - y * S / (x + y)) == 0
+    f_out = sp.lambdify((x, y, *extra), out, "math")
+    args = (1.0, 1e-12, *([1.0] * len(extra)))
+    with mp.workdps(50):
+        exact = mp.mpf(len(extra)) * (1 - mp.mpf(1) / (1 + mp.mpf(1e-12)))
+        assert rel_err(f_out(*args), exact) < 1e-14
+    calls.clear()
+    expr = (
+        I
+        + m * sp.expand((a**2 - b**2) ** 2) * sp.sin(theta) ** 2
+        + sp.expand(S * sp.cos(theta) * (x + y))
+    )
+    stable = stable_coefficient(expr, state=(theta,))
+    assert calls
+    assert stable.has((a - b) ** 2)
+    assert sp.expand(stable - expr) == 0
+
+
 def test_stable_linear_keeps_velocity_coefficients_apart():
     v1, v2 = sp.symbols("v1 v2", real=True)
     expr = (1 - x / (x + y)) * v1 + (x + y) * v2 / (x + y) ** 2 + 3

@@ -61,6 +61,7 @@ __all__ = [
     "QUADRATIC_SIMPLIFY_OPS",
     "SINGULAR_FACTOR_OPS",
     "STABLE_ENTRY_OPS",
+    "STABLE_FACTOR_SYMBOLS",
     "STABLE_OPS",
     "STABLE_TERMS",
     "ZERO_EXACT_OPS",
@@ -107,6 +108,13 @@ STABLE_OPS = 600
 #: terms, skip: ... and only when their expansion (bound of :func:`expanded_terms`) is at
 #: most this large (``cancel`` expands in full).
 STABLE_TERMS = 2_000
+#: symbols, skip: ... and numerator and denominator are factored as wholes (``cancel`` and
+#: ``factor`` over every generator, whose cost grows quickly with their number) only for
+#: expressions in at most this many symbols; a larger one is put over a common
+#: denominator without a gcd, and each of its numerator and denominator is written as a
+#: sum over its state monomials with factored coefficients (the differences of nearly
+#: equal parameter terms are still combined).
+STABLE_FACTOR_SYMBOLS = 8
 #: operations, skip: ``sympy.simplify`` of an impact-map entry (``simplify="full"``).
 IMPACT_FULL_OPS = 150
 #: operations, skip: the exact normal-form route of :func:`symmech.algebra.zero.is_zero`.

@@ -23,6 +23,11 @@ The stabilising step implemented here is:
 
 Expressions above :data:`symmech.algebra.budget.STABLE_OPS` operations are left as they are (the
 cost of ``factor`` grows quickly); this mirrors :mod:`symmech.algebra.simplification`.
+Expressions in more than :data:`symmech.algebra.budget.STABLE_FACTOR_SYMBOLS` symbols (a
+bicycle's metric has twenty) skip the factorisation as a whole and keep step 1's
+per-coefficient factoring only: like terms are combined exactly, and each state
+monomial's parameter coefficient is factored, which is where differences of nearly equal
+terms arise.
 """
 
 from __future__ import annotations
@@ -72,6 +77,14 @@ def _collect_factor(f: sp.Expr, state: frozenset) -> sp.Expr:
     return out
 
 
+def _gathered(part: sp.Expr, state: frozenset) -> sp.Expr:
+    """The stable form of a numerator or denominator in many symbols, without factoring
+    it as a whole: expanded (like terms combine exactly), written as a sum over its state
+    monomials with factored parameter coefficients (:func:`_collect_factor`), and with the
+    factors common to every term pulled out (``factor_terms``, a content computation)."""
+    return sp.factor_terms(_collect_factor(sp.expand(part), state))
+
+
 def _refactor(product: sp.Expr, state: frozenset) -> sp.Expr:
     if isinstance(product, sp.Mul):
         return sp.Mul(*[_refactor(a, state) for a in product.args])
@@ -90,7 +103,11 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     ``I + m (a - b)^2 (a + b)^2 sin^2`` (no cancellation when a ~ b).  Returned unchanged:
     expressions already in that form (a cheap structural test, :func:`_already_stable`),
     and those over the budgets :data:`symmech.algebra.budget.STABLE_OPS` (operations) or
-    :data:`symmech.algebra.budget.STABLE_TERMS` (terms of their expansion).
+    :data:`symmech.algebra.budget.STABLE_TERMS` (terms of their expansion).  An expression
+    in more than :data:`symmech.algebra.budget.STABLE_FACTOR_SYMBOLS` symbols is not
+    factored as a whole (the cost of ``factor`` grows quickly with its generators): its
+    numerator and denominator over a common denominator are each written as a sum over
+    their state monomials with factored coefficients (:func:`_gathered`).
 
     >>> import sympy as sp
     >>> I, m, R = sp.symbols("I m R", positive=True)
@@ -112,6 +129,9 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     # exp(-c^2/s^2), whose factors overflow where the exponential itself is tiny
     expr, opaque = _opaque_exponentials(expr)
     st = st | {d for d, e in opaque.items() if e.free_symbols & st}
+    if len(expr.free_symbols) > limits.STABLE_FACTOR_SYMBOLS:
+        num, den = sp.fraction(sp.together(expr))
+        return (_gathered(num, st) / _gathered(den, st)).xreplace(opaque)
     c = sp.cancel(sp.together(expr))
     num, den = sp.fraction(c)
     try:
