@@ -55,7 +55,7 @@ def test_state_monomials_get_factored_coefficients():
 
 
 def test_many_symbols_take_the_gathered_route_and_stay_stable(monkeypatch):
-    """Over STABLE_FACTOR_SYMBOLS symbols nothing is factored as a whole, yet the
+    """Over STABLE_FACTOR_GENERATORS symbols nothing is factored as a whole, yet the
     difference of nearly equal terms is still combined: (1 - x/(x+y)) S, with S a sum of
     many symbols, becomes y S/(x + y); I + m (a^2 - b^2)^2 sin^2 + ... keeps its
     factored coefficient of sin^2."""
@@ -66,7 +66,7 @@ def test_many_symbols_take_the_gathered_route_and_stay_stable(monkeypatch):
     monkeypatch.setattr(
         stability, "_gathered", lambda part, st: calls.append(part) or real(part, st)
     )
-    extra = sp.symbols(f"s0:{budget.STABLE_FACTOR_SYMBOLS}", positive=True)
+    extra = sp.symbols(f"s0:{budget.STABLE_FACTOR_GENERATORS}", positive=True)
     S = sp.Add(*extra)
     out = stable_coefficient((1 - x / (x + y)) * S)
     assert calls, "the expression did not take the gathered route"

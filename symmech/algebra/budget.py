@@ -9,6 +9,8 @@ code generation) is bounded by a budget below, measured in one of
 * **operations**: ``sympy.count_ops`` of an expression;
 * **size**: the order of a matrix block;
 * **degree**: the total degree of an expansion (:func:`expanded_terms` reports it);
+* **generators**: the symbols, function values and fractional powers a polynomial
+  algebra takes as its variables;
 * **seconds**: wall-clock time of a stage (:func:`time_limit`, :func:`checkpoint`).
 
 Two kinds of reaction, chosen by the stage and documented with each limit:
@@ -61,7 +63,7 @@ __all__ = [
     "QUADRATIC_SIMPLIFY_OPS",
     "SINGULAR_FACTOR_OPS",
     "STABLE_ENTRY_OPS",
-    "STABLE_FACTOR_SYMBOLS",
+    "STABLE_FACTOR_GENERATORS",
     "STABLE_OPS",
     "STABLE_TERMS",
     "ZERO_EXACT_OPS",
@@ -108,13 +110,13 @@ STABLE_OPS = 600
 #: terms, skip: ... and only when their expansion (bound of :func:`expanded_terms`) is at
 #: most this large (``cancel`` expands in full).
 STABLE_TERMS = 2_000
-#: symbols, skip: ... and numerator and denominator are factored as wholes (``cancel`` and
-#: ``factor`` over every generator, whose cost grows quickly with their number) only for
-#: expressions in at most this many symbols; a larger one is put over a common
-#: denominator without a gcd, and each of its numerator and denominator is written as a
-#: sum over its state monomials with factored coefficients (the differences of nearly
-#: equal parameter terms are still combined).
-STABLE_FACTOR_SYMBOLS = 8
+#: generators, skip: ... and numerator and denominator are factored as wholes (``cancel``
+#: and ``factor``, whose cost grows quickly with the number of generators: symbols,
+#: function values, fractional powers) only for expressions with at most this many; a
+#: larger one is put over a common denominator without a gcd, and each of its numerator
+#: and denominator is expanded and written as a sum over its state monomials with
+#: factored coefficients (differences of nearly equal parameter terms still combine).
+STABLE_FACTOR_GENERATORS = 10
 #: operations, skip: ``sympy.simplify`` of an impact-map entry (``simplify="full"``).
 IMPACT_FULL_OPS = 150
 #: operations, skip: the exact normal-form route of :func:`symmech.algebra.zero.is_zero`.

@@ -23,11 +23,11 @@ The stabilising step implemented here is:
 
 Expressions above :data:`symmech.algebra.budget.STABLE_OPS` operations are left as they are (the
 cost of ``factor`` grows quickly); this mirrors :mod:`symmech.algebra.simplification`.
-Expressions in more than :data:`symmech.algebra.budget.STABLE_FACTOR_SYMBOLS` symbols (a
-bicycle's metric has twenty) skip the factorisation as a whole and keep step 1's
-per-coefficient factoring only: like terms are combined exactly, and each state
-monomial's parameter coefficient is factored, which is where differences of nearly equal
-terms arise.
+Expressions in more than :data:`symmech.algebra.budget.STABLE_FACTOR_GENERATORS`
+generators (symbols, function values, fractional powers; an entry of a bicycle's metric
+has 26) skip the factorisation as a whole and keep step 1's per-coefficient factoring
+only: like terms are combined exactly, and each state monomial's parameter coefficient is
+factored, which is where differences of nearly equal terms arise.
 """
 
 from __future__ import annotations
@@ -77,12 +77,32 @@ def _collect_factor(f: sp.Expr, state: frozenset) -> sp.Expr:
     return out
 
 
+def _generators(expr: sp.Expr) -> set[sp.Expr]:
+    """The generators ``factor`` works over: the symbols, function values and fractional
+    powers reached through sums, products and integer powers (each distinct subtree is
+    visited once)."""
+    found: set[sp.Expr] = set()
+    seen: set[sp.Expr] = set()
+    stack = [expr]
+    while stack:
+        e = stack.pop()
+        if e in seen or e.is_Number:
+            continue
+        seen.add(e)
+        if e.is_Add or e.is_Mul:
+            stack.extend(e.args)
+        elif e.is_Pow and e.exp.is_Integer:
+            stack.append(e.base)
+        else:
+            found.add(e)
+    return found
+
+
 def _gathered(part: sp.Expr, state: frozenset) -> sp.Expr:
     """The stable form of a numerator or denominator in many symbols, without factoring
-    it as a whole: expanded (like terms combine exactly), written as a sum over its state
-    monomials with factored parameter coefficients (:func:`_collect_factor`), and with the
-    factors common to every term pulled out (``factor_terms``, a content computation)."""
-    return sp.factor_terms(_collect_factor(sp.expand(part), state))
+    it as a whole: expanded (like terms combine exactly) and written as a sum over its
+    state monomials with factored parameter coefficients (:func:`_collect_factor`)."""
+    return _collect_factor(sp.expand(part), state)
 
 
 def _refactor(product: sp.Expr, state: frozenset) -> sp.Expr:
@@ -104,8 +124,9 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     expressions already in that form (a cheap structural test, :func:`_already_stable`),
     and those over the budgets :data:`symmech.algebra.budget.STABLE_OPS` (operations) or
     :data:`symmech.algebra.budget.STABLE_TERMS` (terms of their expansion).  An expression
-    in more than :data:`symmech.algebra.budget.STABLE_FACTOR_SYMBOLS` symbols is not
-    factored as a whole (the cost of ``factor`` grows quickly with its generators): its
+    in more than :data:`symmech.algebra.budget.STABLE_FACTOR_GENERATORS` generators
+    (:func:`_generators`) is not factored as a whole (the cost of ``factor`` grows
+    quickly with their number): its
     numerator and denominator over a common denominator are each written as a sum over
     their state monomials with factored coefficients (:func:`_gathered`).
 
@@ -129,7 +150,7 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     # exp(-c^2/s^2), whose factors overflow where the exponential itself is tiny
     expr, opaque = _opaque_exponentials(expr)
     st = st | {d for d, e in opaque.items() if e.free_symbols & st}
-    if len(expr.free_symbols) > limits.STABLE_FACTOR_SYMBOLS:
+    if len(_generators(expr)) > limits.STABLE_FACTOR_GENERATORS:
         num, den = sp.fraction(sp.together(expr))
         return (_gathered(num, st) / _gathered(den, st)).xreplace(opaque)
     c = sp.cancel(sp.together(expr))
