@@ -54,6 +54,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import sympy as sp
 
@@ -261,6 +262,49 @@ def _name_power_bases(
     return out, new_exprs
 
 
+@lru_cache(maxsize=4096)
+def _printable(e: sp.Expr) -> tuple[sp.Expr, str | None]:
+    """An entry as it is printed: :func:`~symmech.codegen.printers.safe_rewrite`, then
+    :func:`~symmech.codegen.printers.fold_numbers`; with the reason it cannot be printed
+    (``"not finite"``: it holds ``zoo``, ``nan`` or an infinity; or the error of the
+    folding), or None.  Kept per entry: the functions of one scene share most entries
+    (the metric and the forcing recur in every solve)."""
+    e = safe_rewrite(e)
+    if e.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
+        return e, "not finite"
+    try:
+        return fold_numbers(e), None
+    except ValueError as exc:
+        return e, str(exc)
+
+
+@lru_cache(maxsize=32)
+def _eliminated(
+    entries: tuple[sp.Expr, ...],
+) -> tuple[tuple[tuple[sp.Symbol, sp.Expr], ...], tuple[sp.Expr, ...]]:
+    """The temporaries and reduced entries of one CSE over ``entries`` (``tmp0``,
+    ``tmp1``, ... in canonical order), with the compound bases of powers printed as
+    products named (:func:`_name_power_bases`).  A pure function of the entries, kept:
+    functions whose entries are the same (``acceleration`` and ``multipliers`` solve the
+    same system) share one elimination."""
+    symbols = sp.numbered_symbols("tmp", real=True)
+    replacements, reduced = sp.cse(list(entries), symbols=symbols, order="canonical")
+    named, exprs = _name_power_bases(replacements, reduced, symbols)
+    return tuple(named), tuple(exprs)
+
+
+@lru_cache(maxsize=32)
+def _operations(
+    replacements: tuple[tuple[sp.Symbol, sp.Expr], ...], reduced: tuple[sp.Expr, ...]
+) -> int:
+    """``sympy.count_ops`` of the temporaries and of the reduced entries (the figure in a
+    function's header); kept with the elimination it counts."""
+    return int(
+        sum(sp.count_ops(e) for _, e in replacements)
+        + sum(sp.count_ops(e) for e in reduced if not e.is_number)
+    )
+
+
 def _constant(e: sp.Expr) -> float | None:
     """The double of a symbol-free entry (as the printed literal evaluates: rationals and
     folded numbers are correctly rounded), or None for a run-time value."""
@@ -290,16 +334,14 @@ def lower(
     where: list[tuple[str, int, tuple[int, ...]]] = []
     for b in f.blocks:
         for flat, e in enumerate(b.entries):
-            e = safe_rewrite(e)
-            if e.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
+            e, problem = _printable(e)
+            if problem == "not finite":
                 raise CodegenError(
                     f"{f.name}: {b.name}[{flat}] is not finite ({e}); the closed form is"
                     " singular for every state"
                 )
-            try:
-                e = fold_numbers(e)
-            except ValueError as exc:
-                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {exc}") from None
+            if problem is not None:
+                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {problem}")
             entries.append(e)
             if not b.shape:
                 idx: tuple[int, ...] = ()
@@ -344,14 +386,10 @@ def lower(
         entries = [entries[i] for i in keep]
         where = [where[i] for i in keep]
     nonconst = [i for i, e in enumerate(entries) if not e.is_number]
-    symbols = sp.numbered_symbols("tmp", real=True)
     if cse and nonconst:
-        replacements, reduced = sp.cse(
-            [entries[i] for i in nonconst], symbols=symbols, order="canonical"
-        )
-        replacements, reduced = _name_power_bases(replacements, reduced, symbols)
+        replacements, reduced = _eliminated(tuple(entries[i] for i in nonconst))
     else:
-        replacements, reduced = [], [entries[i] for i in nonconst]
+        replacements, reduced = (), tuple(entries[i] for i in nonconst)
     final = list(entries)
     for i, e in zip(nonconst, reduced, strict=True):
         final[i] = e
@@ -370,10 +408,7 @@ def lower(
     printed = tuple(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
     )
-    ops = int(
-        sum(sp.count_ops(e) for _, e in replacements)
-        + sum(sp.count_ops(e) for e in final if not e.is_number)
-    )
+    ops = _operations(replacements, reduced)
     used_syms: set = set()
     for _, e in replacements:
         used_syms |= e.free_symbols
@@ -473,7 +508,7 @@ def _scalar_body(
     f: FunctionPlan,
     n: int,
     unpack: tuple[tuple[str, int, str], ...],
-    replacements: list,
+    replacements: Sequence[tuple[sp.Symbol, sp.Expr]],
     where: list[tuple[str, int, tuple[int, ...]]],
     final: list[sp.Expr],
     program: Program | None,

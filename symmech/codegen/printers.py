@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import keyword
 import re
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 
 import sympy as sp
@@ -153,20 +153,38 @@ def fold_numbers(expr: sp.Expr) -> sp.Expr:
     def numeric(e: sp.Expr) -> bool:
         return bool(e.is_number) and not e.is_Rational and not isinstance(e, sp.Float)
 
+    memo: dict[sp.Expr, sp.Expr] = {}
+
     def go(e: sp.Expr) -> sp.Expr:
         if e.is_Atom:
             return e
+        out = memo.get(e)
+        if out is None:
+            out = memo[e] = fold(e)
+        return out
+
+    def same(new: Sequence[sp.Expr], old: Sequence[sp.Expr]) -> bool:
+        return all(a is b for a, b in zip(new, old, strict=True))
+
+    def fold(e: sp.Expr) -> sp.Expr:
+        # a node whose arguments come back unchanged is kept, not rebuilt
         if e.is_number:
             return _literal(e) if numeric(e) else e
         if e.is_Pow:
-            return sp.Pow(go(e.base), _normal_exponent(e.exp))
+            base, k = go(e.base), _normal_exponent(e.exp)
+            return e if base is e.base and k is e.exp else sp.Pow(base, k)
         if e.is_Add or e.is_Mul:
             # the exact numeric arguments are combined, then rounded once
+            nums = [a for a in e.args if a.is_number]
+            symbolic = [a for a in e.args if not a.is_number]
+            rest = [go(a) for a in symbolic]
+            if len(nums) <= 1 and not any(numeric(a) for a in nums) and same(rest, symbolic):
+                return e
             op = sp.Add if e.is_Add else sp.Mul
-            combined = op(*[a for a in e.args if a.is_number])
-            rest = [go(a) for a in e.args if not a.is_number]
+            combined = op(*nums)
             return op(_literal(combined) if numeric(combined) else combined, *rest)
-        return e.func(*[go(a) for a in e.args])
+        args = [go(a) for a in e.args]
+        return e if same(args, e.args) else e.func(*args)
 
     return go(sp.sympify(expr))
 
