@@ -22,7 +22,7 @@ import sympy as sp
 
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
 from symmech.codegen.escape import file_name
-from symmech.codegen.lower import LoweredFunction, Names, lower
+from symmech.codegen.lower import LoweredFunction, Memo, Names, lower
 from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import Block, CodegenError, ScenePlan, build_plan
 from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
@@ -149,6 +149,7 @@ def generate(
     rules = _parameter_rules(scene, plan)
     names = Names.of(plan)
     done: dict[str, LoweredFunction] = {}
+    memo = Memo()
     for f in plan.functions:
         callee = done[f.calls] if f.calls is not None else None
         done[f.name] = lower(
@@ -160,6 +161,7 @@ def generate(
             cse=cse,
             callee=callee,
             scalar=backend.scalar,
+            memo=memo,
         )
     lowered = tuple(done.values())
     omitted = (*plan.omitted, *_argument_notes(plan, lowered))

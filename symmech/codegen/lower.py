@@ -6,7 +6,10 @@ of a function, after :func:`~symmech.codegen.printers.safe_rewrite` and
 product (``(a + b)**3``) then gets a temporary of its own, so it is evaluated once.  The
 temporaries and the entries are printed by the backend's printer
 (:mod:`symmech.codegen.printers`).  The result is a frozen :class:`LoweredFunction` of
-already-printed lines: templates only lay them out.
+already-printed lines: templates only lay them out.  The functions of one scene share
+their entries (the metric and the forcing recur in every solve): a :class:`Memo` kept for
+one ``generate`` call rewrites and folds each entry once, and runs one CSE per distinct
+list of entries.
 
 A generated function takes its state arrays (``q``, ``v``, or ``y``: they fix the batch
 shape; C marks one it does not read ``(void)``) and, only when it reads them, the
@@ -54,7 +57,6 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
 
 import sympy as sp
 
@@ -70,7 +72,7 @@ from symmech.codegen.printers import (
 from symmech.codegen.unroll import STEP_INPUTS, Program, trace_step
 from symmech.declaration.symbols import t as TIME
 
-__all__ = ["LoweredFunction", "Names", "lower", "step_flops"]
+__all__ = ["LoweredFunction", "Memo", "Names", "lower", "step_flops"]
 
 
 @dataclass(frozen=True)
@@ -262,43 +264,61 @@ def _name_power_bases(
     return out, new_exprs
 
 
-@lru_cache(maxsize=4096)
-def _printable(e: sp.Expr) -> tuple[sp.Expr, str | None]:
-    """An entry as it is printed: :func:`~symmech.codegen.printers.safe_rewrite`, then
-    :func:`~symmech.codegen.printers.fold_numbers`; with the reason it cannot be printed
-    (``"not finite"``: it holds ``zoo``, ``nan`` or an infinity; or the error of the
-    folding), or None.  Kept per entry: the functions of one scene share most entries
-    (the metric and the forcing recur in every solve)."""
-    e = safe_rewrite(e)
-    if e.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-        return e, "not finite"
-    try:
-        return fold_numbers(e), None
-    except ValueError as exc:
-        return e, str(exc)
+class Memo:
+    """What the functions of one generated scene share, computed once per ``generate``
+    call: each entry as it is printed (:meth:`printable`) and the CSE of each distinct
+    list of entries (:meth:`eliminated`; ``acceleration`` and ``multipliers`` solve the
+    same system).  Scoped to the call, so nothing outlives the code it served."""
+
+    def __init__(self) -> None:
+        self._printable: dict[sp.Expr, tuple[sp.Expr, str | None]] = {}
+        self._eliminated: dict[tuple[sp.Expr, ...], _Elimination] = {}
+
+    def printable(self, e: sp.Expr) -> tuple[sp.Expr, str | None]:
+        """An entry as it is printed: :func:`~symmech.codegen.printers.safe_rewrite`,
+        then :func:`~symmech.codegen.printers.fold_numbers`; with the reason it cannot be
+        printed (``"not finite"``: it holds ``zoo``, ``nan`` or an infinity; or the error
+        of the folding), or None."""
+        hit = self._printable.get(e)
+        if hit is None:
+            r = safe_rewrite(e)
+            if r.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
+                hit = (r, "not finite")
+            else:
+                try:
+                    hit = (fold_numbers(r), None)
+                except ValueError as exc:
+                    hit = (r, str(exc))
+            self._printable[e] = hit
+        return hit
+
+    def eliminated(self, entries: tuple[sp.Expr, ...]) -> _Elimination:
+        """The temporaries and reduced entries of one CSE over ``entries`` (``tmp0``,
+        ``tmp1``, ... in canonical order), the compound bases of powers printed as
+        products named (:func:`_name_power_bases`), and ``sympy.count_ops`` of the
+        result (the figure in a function's header)."""
+        hit = self._eliminated.get(entries)
+        if hit is None:
+            symbols = sp.numbered_symbols("tmp", real=True)
+            replacements, reduced = sp.cse(list(entries), symbols=symbols, order="canonical")
+            named, exprs = _name_power_bases(replacements, reduced, symbols)
+            hit = self._eliminated[entries] = _Elimination(
+                tuple(named), tuple(exprs), _operations(named, exprs)
+            )
+        return hit
 
 
-@lru_cache(maxsize=32)
-def _eliminated(
-    entries: tuple[sp.Expr, ...],
-) -> tuple[tuple[tuple[sp.Symbol, sp.Expr], ...], tuple[sp.Expr, ...]]:
-    """The temporaries and reduced entries of one CSE over ``entries`` (``tmp0``,
-    ``tmp1``, ... in canonical order), with the compound bases of powers printed as
-    products named (:func:`_name_power_bases`).  A pure function of the entries, kept:
-    functions whose entries are the same (``acceleration`` and ``multipliers`` solve the
-    same system) share one elimination."""
-    symbols = sp.numbered_symbols("tmp", real=True)
-    replacements, reduced = sp.cse(list(entries), symbols=symbols, order="canonical")
-    named, exprs = _name_power_bases(replacements, reduced, symbols)
-    return tuple(named), tuple(exprs)
+@dataclass(frozen=True)
+class _Elimination:
+    replacements: tuple[tuple[sp.Symbol, sp.Expr], ...]
+    reduced: tuple[sp.Expr, ...]
+    ops: int
 
 
-@lru_cache(maxsize=32)
 def _operations(
-    replacements: tuple[tuple[sp.Symbol, sp.Expr], ...], reduced: tuple[sp.Expr, ...]
+    replacements: Sequence[tuple[sp.Symbol, sp.Expr]], reduced: Sequence[sp.Expr]
 ) -> int:
-    """``sympy.count_ops`` of the temporaries and of the reduced entries (the figure in a
-    function's header); kept with the elimination it counts."""
+    """``sympy.count_ops`` of the temporaries and of the reduced entries."""
     return int(
         sum(sp.count_ops(e) for _, e in replacements)
         + sum(sp.count_ops(e) for e in reduced if not e.is_number)
@@ -322,19 +342,22 @@ def lower(
     callee: LoweredFunction | None = None,
     scalar: tuple[Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer], Dialect]
     | None = None,
+    memo: Memo | None = None,
 ) -> LoweredFunction:
     """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer,
     ``dialect`` prints its unrolled linear algebra); ``callee`` is the lowered function
     that ``f`` calls (``rhs``: ``acceleration``).  ``scalar`` (a printer and a dialect)
     also prints the one-state variant of a function of the state and the parameters
-    (:func:`_scalar_body`)."""
+    (:func:`_scalar_body`).  ``memo`` carries what the functions of one scene share
+    (:class:`Memo`; a fresh one when omitted)."""
+    memo = memo if memo is not None else Memo()
     if f.calls is not None and (callee is None or callee.name != f.calls):
         raise CodegenError(f"{f.name} calls {f.calls}: lower it first and pass it as callee")
     entries: list[sp.Expr] = []
     where: list[tuple[str, int, tuple[int, ...]]] = []
     for b in f.blocks:
         for flat, e in enumerate(b.entries):
-            e, problem = _printable(e)
+            e, problem = memo.printable(e)
             if problem == "not finite":
                 raise CodegenError(
                     f"{f.name}: {b.name}[{flat}] is not finite ({e}); the closed form is"
@@ -387,9 +410,11 @@ def lower(
         where = [where[i] for i in keep]
     nonconst = [i for i, e in enumerate(entries) if not e.is_number]
     if cse and nonconst:
-        replacements, reduced = _eliminated(tuple(entries[i] for i in nonconst))
+        done = memo.eliminated(tuple(entries[i] for i in nonconst))
+        replacements, reduced, ops = done.replacements, done.reduced, done.ops
     else:
         replacements, reduced = (), tuple(entries[i] for i in nonconst)
+        ops = _operations(replacements, reduced)
     final = list(entries)
     for i, e in zip(nonconst, reduced, strict=True):
         final[i] = e
@@ -408,7 +433,6 @@ def lower(
     printed = tuple(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
     )
-    ops = _operations(replacements, reduced)
     used_syms: set = set()
     for _, e in replacements:
         used_syms |= e.free_symbols
