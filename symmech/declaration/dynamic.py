@@ -85,19 +85,22 @@ class DynamicTranslation:
             return type(value)(self.expr(e, field) for e in value)
         if not isinstance(value, sp.Basic):
             return value
-        bad = [d for d in value.atoms(sp.Derivative) if d in self._forbidden]
+        # one walk for the atoms, one substitution: xreplace matches the largest
+        # sub-expression first, so q'(t) -> qdot wins over q(t) -> q inside it, and an
+        # input tau(t) is replaced whole before t -> symmech.t is reached
+        atoms = value.atoms(sp.Derivative, AppliedUndef)
+        bad = [d for d in atoms if d in self._forbidden]
         if bad:
             raise SceneError(
                 f"{field}: contains {self._forbidden[bad[0]]} ({bad[0]}); a declaration gives"
                 " positions and velocities only"
             )
-        out = value.xreplace(self._rates).xreplace(self._plain)
         inputs = {
-            a: sp.Function(str(a.func), real=True)(self.time)
-            for a in out.atoms(AppliedUndef)
-            if _is_dynamic(a, self.time) and a.is_real is None
+            a: sp.Function(str(a.func), real=True)(TIME)
+            for a in atoms
+            if a not in self._plain and _is_dynamic(a, self.time) and a.is_real is None
         }
-        return out.xreplace(inputs).xreplace({self.time: TIME})
+        return value.xreplace({**self._rates, **self._plain, **inputs, self.time: TIME})
 
     def wall(self, w: object, field: str) -> object:
         if not isinstance(w, Wall):

@@ -47,21 +47,38 @@ __all__ = [
 ]
 
 
+_Sparse = dict[tuple[int, int], list[tuple[int, sp.Expr]]]
+
+
+def _sparse(c: sp.Array | None, n: int) -> _Sparse | None:
+    """The non-zero commutation coefficients by lower pair: ``(a, b) -> [(p, c^p_ab)]``,
+    p ascending (read once: indexing a sympy Array costs more than the product it feeds)."""
+    if c is None:
+        return None
+    out: _Sparse = {}
+    for a in range(n):
+        for b in range(n):
+            nz = [(p, c[p, a, b]) for p in range(n) if c[p, a, b] != 0]
+            if nz:
+                out[(a, b)] = nz
+    return out
+
+
 def _lowered(
     G: sp.MatrixBase,
     D: Derivative,
-    c: sp.Array | None,
+    c: _Sparse | None,
     k: int,
     i: int,
     j: int,
 ) -> sp.Expr:
-    """omega_kij = g(nabla_{u_i} u_j, u_k) (Koszul formula; c = None for coordinates)."""
+    """omega_kij = g(nabla_{u_i} u_j, u_k) (Koszul formula; c = None for coordinates, else
+    the commutation coefficients as :func:`_sparse` gives them)."""
     out = (D(G[j, k], i) + D(G[i, k], j) - D(G[i, j], k)) / 2
     if c is not None:
-        n = G.rows
 
         def low(a: int, b: int, m: int) -> sp.Expr:  # c_abm = g_mp c^p_ab
-            return sp.Add(*[G[m, p] * c[p, a, b] for p in range(n) if c[p, a, b] != 0])
+            return sp.Add(*[G[m, p] * cp for p, cp in c.get((a, b), ())])
 
         out += (low(i, j, k) - low(i, k, j) - low(j, k, i)) / 2
     return out
@@ -162,7 +179,7 @@ def connection_first_kind(
     check_level(level, "connection_first_kind")
     n = len(q)
     D = Derivative(q, frame)
-    c = None if frame is None else commutation
+    c = None if frame is None else _sparse(commutation, n)
     index = [(k, i, j) for k in range(n) for i in range(n) for j in range(n)]
     values = simplify_all([_lowered(G, D, c, k, i, j) for k, i, j in index], level)
     return sp.ImmutableDenseNDimArray(values, (n, n, n))
@@ -215,7 +232,7 @@ def forcing(
     D = Derivative(q, frame)
     if frame is None:
         return _forcing_coordinates(G, V, q, v, D, level)
-    c = commutation
+    c = _sparse(commutation, n)
     rows = []
     for k in range(n):
         terms = []

@@ -42,8 +42,10 @@ from typing import Any
 import sympy as sp
 
 from symmech.algebra.rank import rank_at
+from symmech.algebra.walk import atoms
 from symmech.algebra.zero import is_zero
 from symmech.declaration.checks import Points
+from symmech.declaration.dynamic import DynamicTranslation
 from symmech.errors import SceneError
 
 __all__ = ["scene_arguments"]
@@ -233,9 +235,27 @@ def _partials_of(vec: Any, model: _Model, what: str) -> list[Any]:
 
 
 def _dot(a: Any, b: Any, expand: bool = True) -> sp.Expr:
+    """``a . b``; with ``expand``, expanded and summed term by term: ``b_i D_ij a_j`` over
+    the frame components of a and b with ``D`` the direction cosines between their frames
+    (what ``sympy.physics.vector`` multiplies as matrices).  The expansion of a polynomial
+    in the same atoms is the same expression whichever way its terms were grouped, so
+    this is ``sp.expand(a & b)`` without the matrix products."""
     if a == 0 or b == 0:
         return sp.S.Zero
-    return sp.expand(a & b) if expand else a & b
+    if not expand:
+        return a & b
+    terms = []
+    for ca, fa in a.args:
+        for cb, fb in b.args:
+            D = fb.dcm(fa)
+            terms += [
+                cb[i] * D[i, j] * ca[j]
+                for i in range(3)
+                if cb[i] != 0
+                for j in range(3)
+                if D[i, j] != 0 and ca[j] != 0
+            ]
+    return sp.expand(sp.Add(*terms))
 
 
 def _metric(model: _Model) -> sp.Matrix:
@@ -340,9 +360,12 @@ def _identically_zero(exprs: Sequence[sp.Expr]) -> bool:
     """Whether every expression vanishes identically (:func:`symmech.algebra.zero.is_zero`,
     sampled at the points of :class:`~symmech.declaration.checks.Points`, which give
     dynamic symbols and their derivatives values of their own); one that cannot be
-    evaluated counts as not zero."""
+    evaluated counts as not zero.  The smallest (fewest distinct subexpressions) are
+    judged first: a non-zero one ends the check, and the cost of a judgement grows with
+    the size."""
     points = Points([])
-    return all(is_zero(e, points.for_(e)) is True for e in exprs)
+    ordered = sorted(exprs, key=lambda e: len(atoms(e, (sp.Basic,))))
+    return all(is_zero(e, points.for_(e)) is True for e in ordered)
 
 
 def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: _Model) -> bool:
@@ -364,8 +387,7 @@ def _constraint_rows(model: _Model) -> list[list[sp.Expr]]:
     rows = [list(r) for r in model.velocity_rows]
     for h in model.holonomic:
         grad = sp.Matrix([[sp.diff(h, c) for c in model.q]])
-        row = grad * model.S if model.S is not None else grad
-        rows.append([sp.expand(e) for e in row])
+        rows.append(list(grad * model.S if model.S is not None else grad))
     if not rows:
         return []
     M = sp.Matrix(rows)
@@ -374,7 +396,10 @@ def _constraint_rows(model: _Model) -> list[list[sp.Expr]]:
     for a in range(len(rows)):
         if rank_at(M.extract([*kept, a], list(range(M.cols))), point) == len(kept) + 1:
             kept.append(a)
-    return [rows[a] for a in kept]
+    # the differentiated holonomic rows are expanded once kept (a dropped one, often the
+    # derivative of a velocity constraint the model also gives, is never expanded)
+    first = len(model.velocity_rows)
+    return [rows[a] if a < first else [sp.expand(e) for e in rows[a]] for a in kept]
 
 
 def _inertia_forcing(model: _Model) -> list[sp.Expr]:
@@ -404,30 +429,28 @@ def _inertia_forcing(model: _Model) -> list[sp.Expr]:
     return f
 
 
-def _embedded_correction(model: _Model, M: sp.Matrix) -> list[sp.Expr] | None:
-    """Kane's velocity-quadratic inertia forces minus those the metric and frame give
+def _embedded_correction(
+    model: _Model, tr: DynamicTranslation, M: sp.Matrix, S: sp.Matrix | None
+) -> list[sp.Expr] | None:
+    """Kane's velocity-quadratic inertia forces minus those the metric ``M`` and frame
+    ``S`` (both already in symmech's symbols) give
     (:func:`symmech.geometry.connection.forcing`), in symmech's symbols; None when they
     agree (at random points), as they do when every velocity is the time derivative of a
     position.  They differ when the model's velocities embed a constraint (a contact point
     given zero velocity, ``C.set_vel(N, 0)``, with no coordinates for where it is): the
     velocities are then not those of a configuration space, T(q, u) does not determine the
     motion, and the difference enters as an applied force (it does no work)."""
-    from symmech.declaration.dynamic import DynamicTranslation
     from symmech.geometry.connection import forcing
     from symmech.geometry.lie import commutation_coefficients
 
-    me = _me()
-    t = me.dynamicsymbols._t
-    framed = model.S is not None
-    tr = DynamicTranslation(model.q, model.basis if framed else None, t)
     q = tr.coordinates
     v: tuple = (
-        tr.quasi_velocities or () if framed else tuple(tr.expr(w, "speeds") for w in model.basis)
+        tr.quasi_velocities or ()
+        if S is not None
+        else tuple(tr.expr(w, "speeds") for w in model.basis)
     )
-    M_ = tr.expr(M, "metric")
-    S_ = tr.expr(model.S, "frame") if framed else None
-    c = commutation_coefficients(S_, q) if framed else None
-    f_geom = forcing(M_, sp.S.Zero, q, v, S_, c)
+    c = commutation_coefficients(S, q) if S is not None else None
+    f_geom = forcing(M, sp.S.Zero, q, v, S, c)
     f_kane = [tr.expr(e, "inertia forces") for e in _inertia_forcing(model)]
     # not expanded: the scene adds f_geom back, and its terms cancel structurally
     diff = [a - b for a, b in zip(f_kane, f_geom, strict=True)]
@@ -437,29 +460,40 @@ def _embedded_correction(model: _Model, M: sp.Matrix) -> list[sp.Expr] | None:
 def scene_arguments(model: object, *, walls: Sequence = (), name: str | None = None) -> dict:
     """The keyword arguments of :class:`symmech.Scene` for a mechanics model (module
     docstring): coordinates, metric, potential, forces, constraints, frame and
-    quasi-velocities, all in the model's dynamic symbols (the declaration translates them).
-    """
+    quasi-velocities.  The model's dynamic symbols are translated to symmech's
+    (:class:`~symmech.declaration.dynamic.DynamicTranslation`, walls included) here, once,
+    as the declaration would translate them: the correction of the inertia forces needs
+    the metric and frame in symmech's symbols, and the declaration then has nothing left
+    to translate."""
     model_ = _Model(model)
+    framed = model_.S is not None
+    tr = DynamicTranslation(model_.q, model_.basis if framed else None, _me().dynamicsymbols._t)
+
+    def plain(value: Any, field: str) -> Any:
+        return tr.expr(value, field)
+
+    S = plain(model_.S, "frame") if framed else None
     if model_.lagrangian is not None:
         M, V0 = _from_lagrangian(model_)
         V, F = _loads(model_)
-        V += V0
+        M, V, F = plain(M, "metric"), plain(V + V0, "potential"), plain(F, "forces")
     else:
-        M = _metric(model_)
+        M = plain(_metric(model_), "metric")
         V, F = _loads(model_)
-        correction = _embedded_correction(model_, M)
+        V, F = plain(V, "potential"), plain(F, "forces")
+        correction = _embedded_correction(model_, tr, M, S)
         if correction is not None:
             F = [a + b for a, b in zip(F, correction, strict=True)]
-    rows = _constraint_rows(model_)
+    rows = [plain(r, f"constraints[{a}]") for a, r in enumerate(_constraint_rows(model_))]
     out: dict[str, Any] = {
         "metric": M,
         "potential": V,
         "forces": F if any(e != 0 for e in F) else None,
         "constraints": rows,
-        "walls": list(walls),
+        "walls": [tr.wall(w, f"walls[{k}]") for k, w in enumerate(walls)],
         "name": name,
     }
-    if model_.S is not None:
-        out["frame"] = model_.S
-        out["quasi_velocities"] = list(model_.basis)
-    return {"coordinates": list(model_.q), **out}
+    if framed:
+        out["frame"] = S
+        out["quasi_velocities"] = list(tr.quasi_velocities or ())
+    return {"coordinates": list(tr.coordinates), **out}
