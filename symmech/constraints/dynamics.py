@@ -27,6 +27,7 @@ import sympy as sp
 from symmech.algebra.field import common_domain
 from symmech.algebra.simplification import Level, check_level, polish
 from symmech.constraints.projectors import bordered, solve_spd
+from symmech.geometry.derivatives import Derivative
 
 __all__ = [
     "constrained_acceleration",
@@ -41,16 +42,19 @@ def constraint_rate(
 ) -> sp.Matrix:
     """``mu_dot v`` with ``mu_dot = sum_a (d mu / d q^a) q_dot^a`` (m x 1).
 
-    ``q_dot`` is the coordinate velocity written in the velocity basis (``S v``).
+    ``q_dot`` is the coordinate velocity written in the velocity basis (``S v``).  The
+    partial derivatives are those of :class:`~symmech.geometry.derivatives.Derivative`
+    (memoised over shared subexpressions, as for the forcing).
     """
     m = mu.rows
     vcol = sp.Matrix(v)
     out = sp.zeros(m, 1)
-    for a, qa in enumerate(q):
+    D = Derivative(q)
+    for a in range(len(q)):
         if q_dot[a] == 0:
             continue
-        dmu = mu.applyfunc(lambda e, qa=qa: sp.diff(e, qa) if qa in e.free_symbols else 0)
-        if dmu.is_zero_matrix:
+        dmu = mu.applyfunc(lambda e, a=a: D.partial(e, a))
+        if all(e == 0 for e in dmu):  # structurally zero: mu does not contain q^a
             continue
         out += q_dot[a] * (dmu * vcol)
     return out
