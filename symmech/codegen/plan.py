@@ -47,6 +47,7 @@ from sympy.core.function import AppliedUndef
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.stability import stable_coefficient
+from symmech.algebra.walk import atoms
 from symmech.codegen.blocks import (
     BATCH_SUFFIX,
     Block,
@@ -204,10 +205,14 @@ class _Inputs:
         e = sp.sympify(e)
         if self.definitions:
             e = e.subs(self.definitions).doit()
-        atoms = [a for a in e.atoms(sp.Derivative) if isinstance(a.expr, AppliedUndef)]
-        atoms += list(e.atoms(AppliedUndef))
+        found = atoms(e, (sp.Derivative, AppliedUndef))  # one walk over distinct subtrees
+        if not found:
+            return e
+        derivatives = [a for a in found if isinstance(a, sp.Derivative)]
+        inputs = [a for a in derivatives if isinstance(a.expr, AppliedUndef)]
+        inputs += [a for a in found if isinstance(a, AppliedUndef)]
         rule = {}
-        for a in atoms:
+        for a in inputs:
             f = a.expr if isinstance(a, sp.Derivative) else a
             if f.args != (TIME,):
                 raise CodegenError(
@@ -219,7 +224,7 @@ class _Inputs:
                 self.slots[a] = sp.Dummy(f"{name}{'_' + 'd' * order if order else ''}", real=True)
             rule[a] = self.slots[a]
         e = e.xreplace(rule) if rule else e
-        leftover = sorted(map(str, e.atoms(sp.Derivative)))
+        leftover = sorted(map(str, atoms(e, (sp.Derivative,)))) if derivatives else []
         if leftover:
             raise CodegenError(f"unevaluated derivatives {leftover} cannot be generated")
         return e

@@ -37,6 +37,8 @@ from sympy.printing.c import C99CodePrinter
 from sympy.printing.numpy import NumPyPrinter
 from sympy.printing.pycode import PythonCodePrinter
 
+from symmech.algebra.walk import atoms
+
 __all__ = [
     "FOLD_DIGITS",
     "MAX_PRODUCT_POWER",
@@ -241,12 +243,13 @@ def safe_rewrite(expr: sp.Expr) -> sp.Expr:
     if expr.is_Atom:
         return expr
     expm1_opt, log1p_opt = optims_c99[:2]
+    found = atoms(expr, (sp.exp, sp.log, sp.Pow))  # one walk over distinct subtrees
     optims = []
-    if expr.has(sp.exp):
+    if any(isinstance(a, sp.exp) for a in found):
         optims.append(expm1_opt)
-    if expr.has(sp.log):
+    if any(isinstance(a, sp.log) for a in found):
         optims.append(log1p_opt)
-    if any(p.exp in (sp.S.Half, -sp.S.Half) for p in expr.atoms(sp.Pow)):
+    if any(a.is_Pow and a.exp in (sp.S.Half, -sp.S.Half) for a in found):
         optims.append(_hypot_opt)
     return optimize(expr, optims) if optims else expr
 
