@@ -10,6 +10,9 @@ For the Whipple bicycle of sympy's own test suite (Meijaard et al. 2007; 4 coord
   declaration), then ``codegen.generate(target="c")`` (strategy auto) and the compilation;
 * the ratios symmech / KanesMethod (the issue's target: derivation plus C generation
   faster than KanesMethod alone, a ratio below 1);
+* a second baseline, what a PyDy user runs after KanesMethod: one ``sympy.cse`` over
+  Kane's ``mass_matrix_full`` and ``forcing_full`` (dynamic symbols swapped for plain
+  ones), then C printing, and KanesMethod plus that;
 * the same for the equations of motion alone: a fresh import, then
   ``generate(..., functions=["rhs"])`` (``rhs`` and the ``acceleration`` it calls: what
   KanesMethod's equations give; the default also emits the mass matrix, the forcing, the
@@ -28,16 +31,36 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
+import sympy as sp
 from mechanics_models import sympy_bicycle
 from sympy.core.cache import clear_cache
 
 import symmech as sm
 
 
+def pydy_generation(KM: object) -> float:
+    """Seconds of PyDy's generation after KanesMethod: the dynamic symbols of Kane's full
+    mass matrix and forcing swapped for plain symbols, one ``sympy.cse`` over both, and
+    the C printing of every temporary and entry (sympy's cache cleared first)."""
+    from sympy.physics.mechanics import find_dynamicsymbols
+
+    clear_cache()
+    t0 = time.perf_counter()
+    M, f = KM.mass_matrix_full, KM.forcing_full  # type: ignore[attr-defined]
+    found = find_dynamicsymbols(M) | find_dynamicsymbols(f)
+    plain = {s: sp.Symbol(f"s{k}") for k, s in enumerate(sorted(found, key=str))}
+    replacements, reduced = sp.cse([M.xreplace(plain), f.xreplace(plain)])
+    text = [sp.ccode(e, assign_to=str(x)) for x, e in replacements]
+    for block in reduced:
+        text.extend(sp.ccode(e) for e in block)
+    return time.perf_counter() - t0
+
+
 def main() -> None:
     timings: dict = {}
     KM, _ = sympy_bicycle(timings)
     kane = timings["kane"]
+    pydy = pydy_generation(KM)
     warnings.simplefilter("ignore")
     clear_cache()  # nothing of Kane's work reused through sympy's cache
     t0 = time.perf_counter()
@@ -53,6 +76,8 @@ def main() -> None:
     imp, gen, comp = t1 - t0, t2 - t1, t4 - t3
     print("Whipple bicycle (sympy test_kane3), seconds on this machine")
     print(f"{'KanesMethod forms the equations (baseline)':48s} {kane:8.2f}")
+    print(f"{'PyDy route: cse + C printing of Kane M, f':48s} {pydy:8.2f}")
+    print(f"{'KanesMethod + PyDy route':48s} {kane + pydy:8.2f}")
     print(f"{'symmech Scene.from_mechanics':48s} {imp:8.2f}   {imp / kane:6.2f}x")
     print(f"{'symmech codegen.generate (C)':48s} {gen:8.2f}   {gen / kane:6.2f}x")
     print(f"{'compile and load':48s} {comp:8.2f}")
