@@ -60,6 +60,7 @@ from symmech.algebra.numeric import (
     proven_sign,
     real_values,
 )
+from symmech.algebra.walk import free_symbols
 
 __all__ = ["SEARCH_EVALUATIONS", "Verdict", "definiteness", "lower_bound"]
 
@@ -348,7 +349,9 @@ def definiteness(
     if kinetic_energy is not None and proven_sign(kinetic_energy) in ("pos", "nonneg"):
         return Verdict("proven", "the kinetic energy is a sum of nonnegative terms")
     n = G.rows
-    q = [c for c in coordinates if c in set().union(*(e.free_symbols for e in G))]
+    memo: dict = {}
+    free = set().union(*(free_symbols(e, memo) for e in G))
+    q = [c for c in coordinates if c in free]
     if not q:
         return Verdict("proven", "the metric does not depend on the coordinates")
     diagonal = all(G[i, j] == 0 for i in range(n) for j in range(n) if i != j)

@@ -24,6 +24,8 @@ from collections.abc import Iterable, Sequence
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech.algebra.walk import atoms as walk_atoms
+from symmech.algebra.walk import xreplace
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.symbols import velocity_of
 from symmech.declaration.wall import Wall
@@ -88,7 +90,7 @@ class DynamicTranslation:
         # one walk for the atoms, one substitution: xreplace matches the largest
         # sub-expression first, so q'(t) -> qdot wins over q(t) -> q inside it, and an
         # input tau(t) is replaced whole before t -> symmech.t is reached
-        atoms = value.atoms(sp.Derivative, AppliedUndef)
+        atoms = walk_atoms(value, (sp.Derivative, AppliedUndef))
         bad = [d for d in atoms if d in self._forbidden]
         if bad:
             raise SceneError(
@@ -100,7 +102,7 @@ class DynamicTranslation:
             for a in atoms
             if a not in self._plain and _is_dynamic(a, self.time) and a.is_real is None
         }
-        return value.xreplace({**self._rates, **self._plain, **inputs, self.time: TIME})
+        return xreplace(value, {**self._rates, **self._plain, **inputs, self.time: TIME})
 
     def wall(self, w: object, field: str) -> object:
         if not isinstance(w, Wall):
@@ -129,8 +131,8 @@ def _has_dynamic(values: Iterable[object], time: sp.Symbol) -> bool:
             stack.extend(value)
         elif isinstance(value, list | tuple):
             stack.extend(value)
-        elif isinstance(value, sp.Basic) and value.has(time):  # cheap: no free-symbol sets
-            if any(_is_dynamic(a, time) for a in value.atoms(AppliedUndef)):
+        elif isinstance(value, sp.Basic):
+            if any(_is_dynamic(a, time) for a in walk_atoms(value, (AppliedUndef,))):
                 return True
     return False
 

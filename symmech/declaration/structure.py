@@ -9,6 +9,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import sympy as sp
 
+from symmech.algebra.walk import free_symbols
 from symmech.declaration.checks import (
     Field,
     Problems,
@@ -184,11 +185,14 @@ def _wall_items(walls: object, problems: Problems) -> list[object]:
 def _sympy_symbols(*values: object) -> set[sp.Symbol]:
     """Free symbols of every sympy object inside ``values`` (nested lists, matrices)."""
     out: set[sp.Symbol] = set()
+    memo: dict = {}
     stack = list(values)
     while stack:
         value = stack.pop()
-        if isinstance(value, sp.Basic | sp.MatrixBase):
-            out |= {s for s in value.free_symbols if isinstance(s, sp.Symbol)}
+        if isinstance(value, sp.MatrixBase):
+            stack.extend(value)
+        elif isinstance(value, sp.Basic):
+            out |= {s for s in free_symbols(value, memo) if isinstance(s, sp.Symbol)}
         elif isinstance(value, list | tuple):
             stack.extend(value)
     return out

@@ -15,6 +15,7 @@ import sympy as sp
 
 from symmech.algebra.numeric import EvaluationError, classify_symmetric, real_values
 from symmech.algebra.sampling import atom_key
+from symmech.algebra.walk import free_symbols, xreplace
 from symmech.declaration.checks import Points, Problems, check_metric
 from symmech.declaration.symbols import t as TIME
 
@@ -56,7 +57,8 @@ def check_metric_signs(
     check_metric(G, label, points, first, q, T)
     if not first.items:
         return None
-    free = G.free_symbols
+    free_memo: dict = {}
+    free = set().union(*(free_symbols(e, free_memo) for e in G))
     unsigned = [
         p
         for p in params
@@ -68,7 +70,8 @@ def check_metric_signs(
             problems.add(m.message)
         return None
     proxy = {p: sp.Dummy(p.name, positive=True) for p in unsigned}
-    G_pos = G.xreplace(proxy)
+    memo: dict = {}
+    G_pos = G.applyfunc(lambda e: xreplace(e, proxy, memo))
     T_pos = T.xreplace(proxy) if T is not None else None
     others = [s for s in params if s not in proxy]
     pos_points = Points([*q, *others, *proxy.values(), TIME])
@@ -81,7 +84,8 @@ def check_metric_signs(
     definite = [p for p in pos_points.for_(G_pos) if _definite(G_pos, p) is True]
     needed = []
     for p, d in proxy.items():
-        flipped = [_definite(G_pos, {**point, d: -point[d]}) for point in definite]
+        # (lazily: the first point where the flip leaves g definite settles it)
+        flipped = (_definite(G_pos, {**point, d: -point[d]}) for point in definite)
         if definite and all(f is False for f in flipped):
             needed.append(p)
     return tuple(sorted(needed, key=atom_key))
