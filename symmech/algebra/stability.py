@@ -126,9 +126,9 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     :data:`symmech.algebra.budget.STABLE_TERMS` (terms of their expansion).  An expression
     in more than :data:`symmech.algebra.budget.STABLE_FACTOR_GENERATORS` generators
     (:func:`_generators`) is not factored as a whole (the cost of ``factor`` grows
-    quickly with their number): its
-    numerator and denominator over a common denominator are each written as a sum over
-    their state monomials with factored coefficients (:func:`_gathered`).
+    quickly with their number): its numerator and denominator over a common denominator
+    are each written as a sum over their state monomials with factored coefficients
+    (:func:`_gathered`).
 
     >>> import sympy as sp
     >>> I, m, R = sp.symbols("I m R", positive=True)

@@ -271,25 +271,20 @@ class Memo:
     same system).  Scoped to the call, so nothing outlives the code it served."""
 
     def __init__(self) -> None:
-        self._printable: dict[sp.Expr, tuple[sp.Expr, str | None]] = {}
+        self._printable: dict[sp.Expr, sp.Expr] = {}
         self._eliminated: dict[tuple[sp.Expr, ...], _Elimination] = {}
 
-    def printable(self, e: sp.Expr) -> tuple[sp.Expr, str | None]:
+    def printable(self, e: sp.Expr) -> sp.Expr:
         """An entry as it is printed: :func:`~symmech.codegen.printers.safe_rewrite`,
-        then :func:`~symmech.codegen.printers.fold_numbers`; with the reason it cannot be
-        printed (``"not finite"``: it holds ``zoo``, ``nan`` or an infinity; or the error
-        of the folding), or None."""
+        then :func:`~symmech.codegen.printers.fold_numbers`.  Raises :class:`_NotFinite`
+        for an entry holding ``zoo``, ``nan`` or an infinity, and the ``ValueError`` of
+        the folding."""
         hit = self._printable.get(e)
         if hit is None:
             r = safe_rewrite(e)
             if r.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-                hit = (r, "not finite")
-            else:
-                try:
-                    hit = (fold_numbers(r), None)
-                except ValueError as exc:
-                    hit = (r, str(exc))
-            self._printable[e] = hit
+                raise _NotFinite(r)
+            hit = self._printable[e] = fold_numbers(r)
         return hit
 
     def eliminated(self, entries: tuple[sp.Expr, ...]) -> _Elimination:
@@ -306,6 +301,11 @@ class Memo:
                 tuple(named), tuple(exprs), _operations(named, exprs)
             )
         return hit
+
+
+class _NotFinite(Exception):
+    """An entry holds ``zoo``, ``nan`` or an infinity (the rewritten entry is its
+    argument)."""
 
 
 @dataclass(frozen=True)
@@ -357,14 +357,15 @@ def lower(
     where: list[tuple[str, int, tuple[int, ...]]] = []
     for b in f.blocks:
         for flat, e in enumerate(b.entries):
-            e, problem = memo.printable(e)
-            if problem == "not finite":
+            try:
+                e = memo.printable(e)
+            except _NotFinite as exc:
                 raise CodegenError(
-                    f"{f.name}: {b.name}[{flat}] is not finite ({e}); the closed form is"
-                    " singular for every state"
-                )
-            if problem is not None:
-                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {problem}")
+                    f"{f.name}: {b.name}[{flat}] is not finite ({exc.args[0]}); the closed"
+                    " form is singular for every state"
+                ) from None
+            except ValueError as exc:
+                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {exc}") from None
             entries.append(e)
             if not b.shape:
                 idx: tuple[int, ...] = ()
