@@ -917,13 +917,19 @@ def pydy_generation(n: int) -> float:
     q, u, frame, particles, forces, kindiffs = _mechanics_model(n)
     kane = sm_mechanics.KanesMethod(frame, q_ind=q, u_ind=u, kd_eqs=kindiffs)
     kane.kanes_equations(particles, forces)
-    M, f = kane.mass_matrix, kane.forcing
     plain = {s: sp.Symbol(f"s{k}") for k, s in enumerate((*q, *u))}
-    replacements, reduced = sp.cse([M.xreplace(plain), f.xreplace(plain)])
+    pydy_print(kane.mass_matrix.xreplace(plain), kane.forcing.xreplace(plain))
+    return time.perf_counter() - t0
+
+
+def pydy_print(M: sp.Matrix, f: sp.Matrix) -> list[str]:
+    """PyDy's generation step: one ``sympy.cse`` over M and f, then C printing of every
+    temporary and entry."""
+    replacements, reduced = sp.cse([M, f])
     text = [sp.ccode(e, assign_to=str(x)) for x, e in replacements]
     for block in reduced:
         text.extend(sp.ccode(e) for e in block)
-    return time.perf_counter() - t0
+    return text
 
 
 def issue13_table() -> None:

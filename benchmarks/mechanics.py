@@ -32,6 +32,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
 import sympy as sp
+from codegen import pydy_print
 from mechanics_models import sympy_bicycle
 from sympy.core.cache import clear_cache
 
@@ -40,8 +41,8 @@ import symmech as sm
 
 def pydy_generation(KM: object) -> float:
     """Seconds of PyDy's generation after KanesMethod: the dynamic symbols of Kane's full
-    mass matrix and forcing swapped for plain symbols, one ``sympy.cse`` over both, and
-    the C printing of every temporary and entry (sympy's cache cleared first)."""
+    mass matrix and forcing swapped for plain symbols, then ``codegen.pydy_print`` (one
+    ``sympy.cse`` over both, C printing; sympy's cache cleared first)."""
     from sympy.physics.mechanics import find_dynamicsymbols
 
     clear_cache()
@@ -49,10 +50,7 @@ def pydy_generation(KM: object) -> float:
     M, f = KM.mass_matrix_full, KM.forcing_full  # type: ignore[attr-defined]
     found = find_dynamicsymbols(M) | find_dynamicsymbols(f)
     plain = {s: sp.Symbol(f"s{k}") for k, s in enumerate(sorted(found, key=str))}
-    replacements, reduced = sp.cse([M.xreplace(plain), f.xreplace(plain)])
-    text = [sp.ccode(e, assign_to=str(x)) for x, e in replacements]
-    for block in reduced:
-        text.extend(sp.ccode(e) for e in block)
+    pydy_print(M.xreplace(plain), f.xreplace(plain))
     return time.perf_counter() - t0
 
 
