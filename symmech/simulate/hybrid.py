@@ -49,6 +49,7 @@ t), ``stats["energy_drift"]`` is the largest ``|E(t) - E(0) - sum of the events'
 
 from __future__ import annotations
 
+import math
 import time as _time
 from dataclasses import dataclass
 from typing import Any, Protocol
@@ -112,7 +113,7 @@ class _Run:
         self.segments: list[tuple[float, float, Any]] = []
         self.events: list[Event] = []
         self.history: dict[int, list[float]] = {w: [] for w in range(self.walls)}
-        self.energy0 = fns.energy(t0, self.y[: self.n], self.y[self.n :])
+        self.energy0 = math.nan  # set by start(): a failing call there ends the run
         self.energy_jumps = 0.0
         self.energy_drift = 0.0
         self.drift = 0.0
@@ -268,6 +269,8 @@ class _Run:
 
         K = self.o.samples
         times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
+        # on a step a few ulps long the samples round onto each other: keep distinct times
+        times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
         vals = [[start_value(i) for i in range(len(funcs))]]
         for k in range(1, len(times)):
             tk = times[k]
@@ -483,7 +486,8 @@ class _Run:
 
     # -- the loop ---------------------------------------------------------------------------
     def start(self) -> None:
-        """Resolve the walls touched at the initial state."""
+        """The initial energy; resolve the walls touched at the initial state."""
+        self.energy0 = self.f.energy(self.t, self.q(self.y), self.v(self.y))
         hit = self.approaching()
         if hit is not None:
             self.impacts(*hit)

@@ -226,7 +226,7 @@ class MpFlow:
         k = self.stepper.error_order
         while True:
             h = min(self.h, self.max_step, left)
-            if h <= 64 * mpmath.eps * max(abs(t), 1):
+            if h < left and h <= 64 * mpmath.eps * max(abs(t), 1):  # as flow.RKFlow
                 raise FlowFailure(f"step size {mpmath.nstr(h, 5)} too small at t = {t}")
             st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol)
             err = st.error

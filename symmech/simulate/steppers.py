@@ -482,9 +482,9 @@ def initial_step(
     ``d0 = ||y0||``, ``d1 = ||f0||``, ``h0 = 0.01 d0/d1`` (``1e-6`` if either is below
     ``1e-5``), one explicit Euler step gives ``d2 = ||f(t0 + h0, y0 + h0 f0) - f0|| / h0``,
     ``h1 = (0.01 / max(d1, d2))^(1/(order+1))`` (``max(1e-6, 1e-3 h0)`` if both are below
-    ``1e-15``) and the result is ``min(100 h0, h1)``.  ``order`` is the error estimator's
-    (:attr:`Stepper.error_order`); the caller clamps the result to its interval and
-    maximum step, as SciPy's ``select_initial_step`` does inside.
+    ``1e-15``) and the result is ``min(100 h0, h1)``, or 0 when ``d1`` overflows (``h0 = 0``).
+    ``order`` is the error estimator's (:attr:`Stepper.error_order`); the caller clamps the
+    result to its interval and maximum step, as SciPy's ``select_initial_step`` does inside.
     """
     y0 = np.asarray(y0, dtype=float)
     f0 = np.asarray(f0, dtype=float)
@@ -494,8 +494,11 @@ def initial_step(
     if direction not in (1, -1, 1.0, -1.0):
         raise StepperError(f"direction = {direction!r}: it must be +1 or -1")
     scale = atol + np.abs(y0) * rtol
-    d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
+    with np.errstate(over="ignore"):  # an overflow gives d1 = inf: the step 0 below
+        d0, d1 = _rms(y0 / scale), _rms(f0 / scale)
     h0 = 1e-6 if d0 < 1e-5 or d1 < 1e-5 else 0.01 * d0 / d1
+    if h0 == 0.0:  # f0 overflows the scale: no step can be taken (the C loop returns 0 too)
+        return 0.0
     f1 = _rhs(f, t0 + direction * h0, y0 + direction * h0 * f0)
     d2 = _rms((f1 - f0) / scale) / h0
     if d1 <= 1e-15 and d2 <= 1e-15:

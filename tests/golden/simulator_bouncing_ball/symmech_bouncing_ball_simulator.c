@@ -431,7 +431,7 @@ static int flow_advance(sim_t *s)
         h = s->h < s->max_step ? s->h : s->max_step;
         h = left < h ? left : h;
         if (left - h < 4 * EPS * fabs(s->t_end)) h = left;
-        if (h <= 8 * EPS * (fabs(t) > 1.0 ? fabs(t) : 1.0)) {
+        if (h < left && h <= 8 * EPS * (fabs(t) > 1.0 ? fabs(t) : 1.0)) { /* flow.py */
             s->d[0] = h;
             s->d[1] = t;
             return stop(s, ST_FAILED, R_STEP_SMALL);
@@ -815,8 +815,11 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
     double *vals = s->vals; /* three rows of NF: samples k-2, k-1, k */
     times[2] = F.t0;
     for (int i = 0; i < F.nf; ++i) vals[2 * NF + i] = F.start[i];
+    int placed = 0; /* samples after t0 (a dip needs two before the current one) */
     for (int k = 1; k <= K; ++k) {
         double tk = k < K ? F.t0 + (s->st1 - F.t0) * (double)k / (double)K : s->st1;
+        if (tk <= times[2]) continue; /* a step a few ulps long: distinct times (hybrid.py) */
+        placed++;
         times[0] = times[1];
         times[1] = times[2];
         times[2] = tk;
@@ -831,7 +834,7 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
             if (crossed(&F, i, a, b)) {
                 bracket = 1;
                 lo = times[1]; hi = tk; glo = a; ghi = b;
-            } else if (k >= 2 && !F.release[i]) {
+            } else if (placed >= 2 && !F.release[i]) {
                 double gs[3] = { vals[i], vals[NF + i], vals[2 * NF + i] };
                 double tv = dip(times, gs);
                 if (!isnan(tv)) {
