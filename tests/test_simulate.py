@@ -269,7 +269,7 @@ def test_bad_input_is_refused_naming_the_argument(ball):
         ({"q0": [1.0, 2.0]}, "q0: expected shape"),
         ({"q0": [float("nan")]}, "q0: every entry must be finite"),
         ({"v0": [1j]}, "v0: complex"),
-        ({"v0": ["a"]}, "v0: expected real numbers"),
+        ({"v0": ["a"]}, "v0: str 'a' is not a real number"),
         ({"q0": [-0.5]}, "wrong side of wall 'floor'"),
         ({"t_end": 0.0}, "t_end must be greater than t0"),
         ({"t_end": float("inf")}, "must be finite"),

@@ -392,7 +392,7 @@ def test_batch_accumulation_times_of_the_bouncing_ball():
         ({"Q0": [[1.0], [np.nan]]}, r"Q0: row 1 is not finite"),
         ({"Q0": [[1.0], [-1.0]]}, r"Q0 row 1 is on the wrong side of wall 'floor'"),
         ({"V0": [[0.0]]}, r"Q0 and V0: 2 rows against 1 rows"),
-        ({"V0": [["a"], ["b"]]}, r"V0: expected real numbers"),
+        ({"V0": [["a"], ["b"]]}, r"V0: str 'a' is not a real number"),
         ({"t_end": 0.0}, r"t_end must be greater than t0"),
         ({"rtol": 2.0}, r"rtol must be below 1"),
         ({"atol": -1.0}, r"atol: expected a finite positive number"),

@@ -233,7 +233,7 @@ def test_resume_from_a_partial_store(tmp_path, monkeypatch):
         ({"q0[3]": [1.0]}, "the scene has 1 coordinates"),
         ({"y0": [1.0], "q0[0]": [2.0]}, "'y0' and 'q0\\[0\\]' set the same quantity"),
         ({"y0": [1.0, 2.0], "alpha": [0.5]}, "differ in length"),
-        ({"y0": ["a"]}, "expected real numbers"),
+        ({"y0": ["a"]}, "str 'a' is not a real number"),
         ({"y0": [[1.0]]}, "1-D array"),
         ({}, "no columns"),
         ([1.0, 2.0], "expected a dict"),

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from symmech.simulate.system import SimulationError
+from symmech.simulate.system import SimulationError, real_values
 
 __all__ = ["CONTACT_MODES", "RunOptions", "check_run", "numbers", "positive", "states"]
 
@@ -58,17 +58,10 @@ def _count(value: object, what: str) -> int:
 
 
 def states(value: object, n: int, what: str, *, rows: bool = False) -> np.ndarray:
-    """``value`` as float64 of shape ``(n,)`` (or ``(N, n)`` with ``rows``, N >= 1): real
-    (not complex, not strings or objects) and finite."""
-    try:
-        a = np.asarray(value)
-    except Exception as exc:
-        raise SimulationError(f"{what}: cannot be read as an array ({exc})") from exc
-    if a.dtype.kind == "c":
-        raise SimulationError(f"{what}: complex values are not a mechanical state")
-    if a.dtype.kind not in "biuf":
-        raise SimulationError(f"{what}: expected real numbers, got dtype {a.dtype}")
-    a = np.array(a, dtype=np.float64, order="C", copy=True)
+    """``value`` as float64 of shape ``(n,)`` (or ``(N, n)`` with ``rows``, N >= 1), real
+    by the rule of the generated code's arguments
+    (:func:`~symmech.simulate.system.real_values`) and finite; a copy in C order."""
+    a = np.array(real_values(value, what), dtype=np.float64, order="C", copy=True)
     if rows:
         if a.ndim != 2 or a.shape[1] != n or a.shape[0] < 1:
             raise SimulationError(f"{what}: expected shape (N, {n}) with N >= 1, got {a.shape}")

@@ -41,8 +41,9 @@ from typing import Any
 import numpy as np
 import sympy as sp
 
-from symmech.codegen import generate
+from symmech.codegen import CodegenError, generate
 from symmech.codegen.module import NumericalError, SceneModule
+from symmech.codegen.runtime_checks import real_array
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
@@ -88,12 +89,23 @@ def contact_scene(scene: Scene, wall: int) -> Scene | None:
     return scene.replace(constraints=rows, walls=(), name=f"{scene.name}_contact_{wall}")
 
 
-def _number(value: object, what: str) -> float:
+def real_values(value: object, what: str) -> np.ndarray:
+    """``value`` as float64 by the rule of the generated code's arguments
+    (:func:`symmech.codegen.runtime_checks.real_array`: real numbers of any NumPy or Python
+    type, sympy numbers included; booleans, strings, bytes, complex and masked values
+    refused), or a :class:`SimulationError` naming ``what``."""
     try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise SimulationError(f"{what}: expected a real number, got {value!r}") from exc
-    if isinstance(value, complex) or not math.isfinite(x):
+        return real_array(value, what)
+    except CodegenError as exc:
+        raise SimulationError(str(exc)) from None
+
+
+def _number(value: object, what: str) -> float:
+    a = real_values(value, what)
+    if a.ndim != 0:
+        raise SimulationError(f"{what}: expected a real number, got {value!r}")
+    x = float(a)
+    if not math.isfinite(x):
         raise SimulationError(f"{what}: expected a finite real number, got {value!r}")
     return x
 

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.system import SimulationError
+from symmech.simulate.system import SimulationError, real_values
 
 __all__ = ["Columns", "product", "read_grid", "resolve_columns"]
 
@@ -52,17 +52,12 @@ def product(**ranges: Any) -> dict[str, np.ndarray]:
 
 def _column(values: object, name: str) -> np.ndarray:
     """``values`` as a non-empty 1-D float64 array (the column ``name``)."""
-    try:
-        a = np.asarray(values)
-    except Exception as exc:
-        raise SimulationError(f"grid column {name!r}: cannot be read as an array ({exc})") from exc
+    a = real_values(values, f"grid column {name!r}")
     if a.ndim != 1 or a.size == 0:
         raise SimulationError(
             f"grid column {name!r}: expected a non-empty 1-D array, got shape {a.shape}"
         )
-    if a.dtype.kind not in "biuf":
-        raise SimulationError(f"grid column {name!r}: expected real numbers, got dtype {a.dtype}")
-    return a.astype(np.float64)
+    return a.copy()
 
 
 def read_grid(grid: object) -> tuple[tuple[str, ...], np.ndarray]:

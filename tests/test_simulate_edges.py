@@ -1,0 +1,128 @@
+"""The simulator at the edges of float64 and of its input: spans a few ulps long, an
+overflowing right-hand side or energy, and the real numbers it accepts.
+
+References are the bouncing ball's closed form (drop from height 1: impact at
+T = sqrt(2/g) with speed sqrt(2 g), rebound alpha sqrt(2 g)) and the generated code's own
+rule for real arguments (:func:`symmech.codegen.runtime_checks.real_array`).
+"""
+
+from __future__ import annotations
+
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+import sympy as sp
+
+import symmech as sm
+from symmech.examples import bouncing_ball
+from symmech.simulate import SimulationError
+from symmech.simulate.steppers import initial_step
+
+P = {"m": 1.0, "g": 9.81, "alpha": 0.5}
+T = math.sqrt(2 / 9.81)
+BACKENDS = ["numpy", "c", "scipy"]
+
+
+@pytest.fixture(scope="module")
+def ball():
+    return bouncing_ball()
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+@pytest.mark.parametrize(
+    "t_end",
+    [T, float(np.nextafter(T, 1)), float(np.nextafter(np.nextafter(T, 1), 1)), T * (1 + 1e-15)],
+)
+def test_a_run_ending_at_or_just_after_an_impact_reaches_t_end(ball, backend, t_end):
+    """The impact leaves a span of a few ulps to t_end: it is the last step, not a step
+    size collapse (this used to end with status 'failed', 'step size ... too small')."""
+    res = sm.simulate(ball, [1.0], [0.0], t_end, params=P, backend=backend, contact="stop")
+    assert res.status == "finished", res.message
+    assert res.t[-1] == t_end
+    assert abs(res.q[-1, 0]) < 1e-9
+    impacts = [e for e in res.events if e.kind == "impact"]
+    assert len(impacts) == len(res.events) <= 1
+    rebound = P["alpha"] if impacts else -1.0
+    assert res.v[-1, 0] == pytest.approx(rebound * math.sqrt(2 * P["g"]), rel=1e-8)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_a_span_below_the_resolution_of_time_is_one_step(ball, backend):
+    res = sm.simulate(ball, [1.0], [0.0], 1e-300, params=P, backend=backend)
+    assert res.status == "finished", res.message
+    assert res.stats["steps"] == 1
+    assert res.q[-1, 0] == 1.0 and res.v[-1, 0] == pytest.approx(-P["g"] * 1e-300, rel=1e-12)
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_a_right_hand_side_beyond_float64_ends_the_run_as_failed(ball, backend):
+    """g = 1e300: the scaled rhs overflows, the first step is 0 and the run fails with a
+    status, on both loops alike (the NumPy loop used to raise ZeroDivisionError)."""
+    res = sm.simulate(ball, [1.0], [0.0], 1.0, params={**P, "g": 1e300}, backend=backend)
+    assert res.status == "failed"
+    assert res.message == "step size 0 too small at t = 0.0"
+
+
+@pytest.mark.parametrize("backend", ["numpy", "c"])
+def test_an_initial_energy_beyond_float64_ends_the_run_as_failed(ball, backend):
+    """v0 = 1e200: the energy overflows at t0; the run fails with a status naming the
+    generated function (the NumPy loop used to raise NumericalError out of simulate)."""
+    res = sm.simulate(ball, [1.0], [1e200], 1.0, params=P, backend=backend)
+    assert res.status == "failed"
+    assert "energy" in res.message and res.message.endswith("at t = 0.0")
+
+
+def test_the_first_step_of_an_overflowing_rhs_is_zero():
+    def f(t, y):
+        return np.array([1e300])
+
+    assert initial_step(f, 0.0, [1.0], [1e300], 1, 4, 1e-6, 1e-9) == 0.0
+    # and a plain one is positive and finite
+    h = initial_step(lambda t, y: -y, 0.0, [1.0], [-1.0], 1, 4, 1e-6, 1e-9)
+    assert 0 < h < math.inf
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        ({"q0": [True]}, "q0: bool True is not a real number"),
+        ({"q0": np.ma.masked_array([1.0], mask=[True])}, "q0: masked values"),
+        ({"v0": [1 + 0j]}, r"v0: complex \(1\+0j\) is not a real number"),
+        ({"params": {**P, "g": "9.81"}}, "params\\['g'\\]: str '9.81' is not a real number"),
+        ({"params": {**P, "m": True}}, "params\\['m'\\]: bool True is not a real number"),
+        ({"params": {**P, "g": np.array([9.81])}}, "params\\['g'\\]: expected a real number"),
+    ],
+)
+def test_values_the_generated_code_refuses_are_refused_before_a_run(ball, change, match):
+    args = {"q0": [1.0], "v0": [0.0], "params": P, **change}
+    with pytest.raises(SimulationError, match=match):
+        sm.simulate(ball, args["q0"], args["v0"], 0.5, params=args["params"], backend="numpy")
+
+
+def test_real_numbers_of_any_type_give_the_float_run(ball):
+    plain = sm.simulate(ball, [1.0], [0.5], 1.0, params=P, backend="numpy")
+    other = sm.simulate(
+        ball,
+        [sp.Integer(1)],
+        np.array([0.5], dtype=">f4"),
+        Fraction(1),
+        params={"m": sp.Integer(1), "g": np.float64(9.81), "alpha": Fraction(1, 2)},
+        backend="numpy",
+    )
+    assert other.status == plain.status == "finished"
+    np.testing.assert_array_equal(other.t, plain.t)
+    np.testing.assert_array_equal(other.q, plain.q)
+    np.testing.assert_array_equal(other.v, plain.v)
+
+
+def test_a_grid_column_follows_the_same_rule():
+    from symmech.sweep.grid import read_grid
+
+    with pytest.raises(SimulationError, match="grid column 'g': str '1' is not a real number"):
+        read_grid({"g": ["1", "2"]})
+    with pytest.raises(SimulationError, match="grid column 'g': masked values"):
+        read_grid({"g": np.ma.masked_array([1.0, 2.0], mask=[False, True])})
+    names, table = read_grid({"g": [sp.Rational(1, 2), Fraction(3, 2)]})
+    assert names == ("g",) and table[:, 0].tolist() == [0.5, 1.5]
