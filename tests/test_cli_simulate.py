@@ -140,3 +140,9 @@ def test_sweep_from_the_command_line_writes_the_table(tmp_path: Path):
         a, h = float(r["alpha"]), float(r["y0"])
         exact = math.sqrt(2 * h / 9.81) * (1 + a) / (1 - a)
         assert abs(float(r["time_to_rest"]) - exact) < 1e-9 * exact
+
+
+def test_simulate_max_steps_bounds_the_run(tmp_path: Path):
+    proc = symmech("simulate", "bouncing_ball", "--max-steps", "3", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 1, proc.stderr  # the run did not reach t_end
+    assert re.search(r"status: max_steps: stopped after 3 steps at t = 0\.\d+", proc.stdout)

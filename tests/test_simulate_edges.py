@@ -126,3 +126,46 @@ def test_a_grid_column_follows_the_same_rule():
         read_grid({"g": np.ma.masked_array([1.0, 2.0], mask=[False, True])})
     names, table = read_grid({"g": [sp.Rational(1, 2), Fraction(3, 2)]})
     assert names == ("g",) and table[:, 0].tolist() == [0.5, 1.5]
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_run_stops_at_max_steps_with_its_own_status(ball, backend):
+    """max_step = 1e-12 over 1 s would be 10^12 steps: the bound on a run's work stops it,
+    at the same step on every backend, in free fall (q = 1 - g t^2 / 2)."""
+    res = sm.simulate(
+        ball, [1.0], [0.0], 1.0, params=P, backend=backend, max_step=1e-12, max_steps=1000
+    )
+    assert res.status == "max_steps"
+    assert res.stats["steps"] == 1000
+    t = float(res.t[-1])
+    assert t == pytest.approx(1e-9, rel=1e-9)
+    assert res.message == f"stopped after 1000 steps at t = {t!r}"
+    assert res.q[-1, 0] == pytest.approx(1 - P["g"] * t * t / 2, abs=1e-15)
+
+
+def test_max_steps_bounds_every_row_of_a_batch_and_of_a_sweep(ball):
+    b = sm.simulate_batch(
+        ball, [[1.0], [2.0]], [[0.0], [0.0]], 1.0, params=P, max_step=1e-12, max_steps=50
+    )
+    assert list(b.statuses) == ["max_steps", "max_steps"]
+    assert all(m.startswith("stopped after 50 steps") for m in b.messages)
+    pytest.importorskip("pandas")
+    tab = sm.sweep(
+        ball, {"q0[0]": [1.0, 2.0]}, 1.0, v0=[0.0], params=P, max_step=1e-12, max_steps=50
+    )
+    assert tab["status"].astype(str).tolist() == ["max_steps", "max_steps"]
+    assert tab["steps"].tolist() == [50, 50]
+
+
+def test_the_default_bound_leaves_an_ordinary_run_alone(ball):
+    res = sm.simulate(ball, [1.0], [0.0], 3.0, params=P, backend="c", contact="stop")
+    assert res.status == "zeno"  # sqrt(2/g) (1 + alpha)/(1 - alpha)
+    assert res.accumulation_time == pytest.approx(3 * T, rel=1e-9)
+
+
+@pytest.mark.parametrize("bad", [0, -1, True, 1.5, "10"])
+def test_max_steps_must_be_a_positive_integer(ball, bad):
+    with pytest.raises(SimulationError, match="max_steps must be a positive integer"):
+        sm.simulate(ball, [1.0], [0.0], 1.0, params=P, max_steps=bad)
+    with pytest.raises(SimulationError, match="max_steps must be a positive integer"):
+        sm.simulate_batch(ball, [[1.0]], [[0.0]], 1.0, params=P, max_steps=bad)

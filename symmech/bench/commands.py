@@ -53,6 +53,7 @@ def add_commands(sub: Any, common: argparse.ArgumentParser) -> None:
     sim.add_argument("--atol", type=float, default=1e-10)
     sim.add_argument("--contact", default="persistent", choices=("persistent", "stop"))
     sim.add_argument("--max-events", type=int, default=100_000)
+    sim.add_argument("--max-steps", type=int, default=10_000_000, help="steps of the run")
     sim.add_argument("--events", type=int, default=20, help="events to print (default 20)")
 
     bench = sub.add_parser("bench", parents=[common], help="error against run time")
@@ -106,6 +107,7 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         atol=args.atol,
         contact=args.contact,
         max_events=args.max_events,
+        max_steps=args.max_steps,
     )
     _print(f"status: {res.status}: {res.message}")
     if res.accumulation_time is not None:

@@ -4,7 +4,7 @@ Every argument is checked before anything is generated or run, and a problem rai
 :class:`~symmech.simulate.system.SimulationError` naming the argument (and the row, for a
 batch): states of the right shape, real and finite; ``t_end > t0``, both finite;
 ``100 eps <= rtol < 1`` (float64 cannot deliver less), ``atol > 0``, ``max_step > 0``;
-``max_events`` and ``event_samples`` positive integers; ``contact`` one of
+``max_events``, ``max_steps`` and ``event_samples`` positive integers; ``contact`` one of
 :data:`CONTACT_MODES`.
 """
 
@@ -38,6 +38,7 @@ class RunOptions:
     max_events: int
     event_samples: int
     contact: str
+    max_steps: int = 10_000_000
 
 
 def positive(value: object, what: str) -> float:
@@ -87,6 +88,7 @@ def check_run(
     max_events: Any,
     event_samples: Any,
     contact: Any,
+    max_steps: Any = 10_000_000,
 ) -> RunOptions:
     """The checked options (see the module docstring)."""
     if contact not in CONTACT_MODES:
@@ -116,6 +118,7 @@ def check_run(
         max_events=_count(max_events, "max_events"),
         event_samples=_count(event_samples, "event_samples"),
         contact=contact,
+        max_steps=_count(max_steps, "max_steps"),
     )
 
 

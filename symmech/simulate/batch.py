@@ -96,6 +96,7 @@ def simulate_batch(
     atol: float = 1e-10,
     max_step: float | None = None,
     max_events: int = 100_000,
+    max_steps: int = 10_000_000,
     contact: str = "persistent",
     threads: int | None = None,
     strategy: str = "auto",
@@ -117,6 +118,7 @@ def simulate_batch(
         max_events=max_events,
         event_samples=event_samples,
         contact=contact,
+        max_steps=max_steps,
     )
     n = scene.n
     Q = states(Q0, n, "Q0", rows=True)
@@ -138,6 +140,7 @@ def simulate_batch(
         max_events=max_events,
         contact=contact,
         samples=event_samples,
+        max_steps=o.max_steps,
     )
     index, vec = options_vector(opts, method, o.max_step, t0f)
     _check_rows(fns, values, Q, V, t0f, rtol_f, atol_f)

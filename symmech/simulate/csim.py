@@ -56,8 +56,9 @@ C_METHODS = ("dop853", "tsit5", "rk45", "rk4")
 #: Entries of a run's info row before the state (see the template's ``info``).
 INFO_HEAD = 23
 # statuses and reasons of the template (enum ST_*, R_*)
-_STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed"}
+_STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed", 5: "max_steps"}
 _R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL, _R_COND = range(1, 11)
+_R_STEPS = 11
 #: info[0] and info[1] of a run that reached t_end: every other row needs :func:`decode`
 FINISHED_CODE, REACHED_END_CODE = 1, _R_END
 _FUNCTIONS: tuple[str, ...] = (
@@ -381,6 +382,7 @@ def options_vector(
         float(opts.max_events),
         float(opts.contact == "stop"),
         float(opts.samples),
+        float(opts.max_steps),
     ]
     return C_METHODS.index(method), np.array(vec, dtype=np.float64)
 
@@ -395,6 +397,8 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
         return status, f"reached t_end = {t_end!r}", None
     if reason == _R_MAX:
         return status, f"stopped after {int(d[1])} events at t = {d[0]!r}", None
+    if reason == _R_STEPS:
+        return status, f"stopped after {int(d[1])} steps at t = {d[0]!r}", None
     if reason == _R_SEQ:
         return (
             status,

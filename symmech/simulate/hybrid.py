@@ -79,6 +79,7 @@ class Options:
     contact: str = "persistent"
     samples: int = 8
     zeno_factor: float = 100.0
+    max_steps: int = 10_000_000
 
 
 class Flow(Protocol):
@@ -505,6 +506,10 @@ class _Run:
             self.start()
             self.flow.start(self.t, self.y, t_end)
             while self.t < t_end:
+                steps = self.flow.stats.steps
+                if steps >= self.o.max_steps:  # the bound on a run's work
+                    at = f"at t = {float(self.t)!r}"
+                    raise _Stop("max_steps", f"stopped after {steps} steps {at}")
                 seg = self.flow.advance()
                 ev = self.detect(seg)
                 if ev is None:

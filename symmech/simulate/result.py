@@ -3,11 +3,11 @@
 :class:`SimulationResult` holds the accepted step times and states (event times included:
 the state just before an event, then the state just after it, at the same time), the list
 of :class:`Event` records, the status (``"finished"``, ``"zeno"``, ``"max_events"``,
-``"failed"``) with a message, and ``stats``.  ``res(t)`` (or ``res.sol(t)``) evaluates the
-continuous output: the integrator's own dense output of the step containing t (NumPy and
-SciPy backends), or the cubic Hermite interpolant through the step ends (C backend, which
-returns the step ends and their derivatives).  At an event time the value after the event
-is returned.
+``"failed"``, ``"max_steps"``) with a message, and ``stats``.  ``res(t)`` (or
+``res.sol(t)``) evaluates the continuous output: the integrator's own dense output of the
+step containing t, or, where a method has none (rk4, and on the C backend DOP853 steps whose
+dense stages were never made), the cubic Hermite interpolant through the step ends.  At an
+event time the value after the event is returned.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import numpy as np
 __all__ = ["STATUSES", "Event", "EventTable", "SimulationResult"]
 
 #: Final statuses of a run.
-STATUSES = ("finished", "zeno", "max_events", "failed")
+STATUSES = ("finished", "zeno", "max_events", "failed", "max_steps")
 
 #: Kinds of events.
 EVENT_KINDS = ("impact", "grazing", "contact", "release")

@@ -81,6 +81,7 @@ def simulate(
     atol: float = 1e-10,
     max_step: float | None = None,
     max_events: int = 100_000,
+    max_steps: int = 10_000_000,
     contact: str = "persistent",
     strategy: str = "auto",
     definitions: Mapping | None = None,
@@ -114,6 +115,7 @@ def simulate(
         max_events=max_events,
         event_samples=event_samples,
         contact=contact,
+        max_steps=max_steps,
     )
     n = scene.n
     q = states(q0, n, "q0")
@@ -155,6 +157,7 @@ def simulate(
         max_events=max_events,
         contact=contact,
         samples=event_samples,
+        max_steps=o.max_steps,
     )
     if backend == "c":
         from symmech.simulate.c_run import run_c

@@ -45,6 +45,7 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
     sw.add_argument("--atol", type=float, default=1e-10)
     sw.add_argument("--contact", default="persistent", choices=("persistent", "stop"))
     sw.add_argument("--max-events", type=int, default=100_000)
+    sw.add_argument("--max-steps", type=int, default=10_000_000, help="steps per run")
     sw.add_argument("--outputs", default="energy", help="outputs, comma separated")
     sw.add_argument("--chunk", type=int, help="runs per chunk (default: N / (4 workers))")
     sw.add_argument("--threads", type=int, help="local threads (default: every core)")
@@ -133,6 +134,7 @@ def run_command(
             rtol=args.rtol,
             atol=args.atol,
             max_events=args.max_events,
+            max_steps=args.max_steps,
             contact=args.contact,
         )
     finally:

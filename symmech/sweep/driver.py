@@ -12,8 +12,8 @@
 Row i of the result is ``simulate(scene, q0_i, v0_i, t_end, params=params_i,
 backend="c", ...)`` summarised (its final state equal to ``res.q[-1]``, ``res.v[-1]`` of
 that run bit for bit): the grid's columns, ``status`` (``"finished"``, ``"zeno"``,
-``"max_events"``, ``"failed"``, or ``"invalid"`` for a run refused by the input checks),
-``message`` (missing where finished), ``t_final``, ``<coordinate>_final`` and
+``"max_events"``, ``"failed"``, ``"max_steps"``, or ``"invalid"`` for a run refused by the
+input checks), ``message`` (missing where finished), ``t_final``, ``<coordinate>_final`` and
 ``<velocity>_final``, ``time_to_rest`` (the accumulation time, or the time the body came
 to rest on a wall, of a run that stopped there, as ``res.accumulation_time``; NaN
 otherwise: with ``contact="persistent"`` the loop continues in contact and reports no
@@ -87,7 +87,7 @@ def _base_state(value: object, n: int, what: str) -> np.ndarray:
 
 def _loop(
     t0: float, t_end: float, rtol: float, atol: float, max_step: float | None,
-    max_events: int, contact: str, samples: int, method: str, width: int,
+    max_events: int, max_steps: int, contact: str, samples: int, method: str, width: int,
 ) -> tuple[Options, LoopOptions]:  # fmt: skip
     """The sweep-wide options, checked as :func:`symmech.simulate.simulate` checks them."""
     t0f, tend = _real(t0, "t0"), _real(t_end, "t_end")
@@ -111,6 +111,7 @@ def _loop(
         max_events=_positive_int(max_events, "max_events"),
         contact=contact,
         samples=_positive_int(samples, "event_samples"),
+        max_steps=_positive_int(max_steps, "max_steps"),
     )
     index, vec = options_vector(opts, method, cap, t0f)
     return opts, LoopOptions(t0=t0f, method=index, vector=vec, width=width)
@@ -191,6 +192,7 @@ def sweep(
     atol: float = 1e-10,
     max_step: float | None = None,
     max_events: int = 100_000,
+    max_steps: int = 10_000_000,
     contact: str = "persistent",
     strategy: str = "auto",
     definitions: Mapping | None = None,
@@ -270,7 +272,7 @@ def sweep(
             f"client: expected a dask.distributed.Client, got {type(client).__name__}"
         )
     opts, loop = _loop(
-        t0, t_end, rtol, atol, max_step, max_events, contact, event_samples, method,
+        t0, t_end, rtol, atol, max_step, max_events, max_steps, contact, event_samples, method,
         INFO_HEAD + 2 * n,
     )  # fmt: skip
     system = system_for(scene, "c", strategy, definitions)

@@ -41,10 +41,10 @@
 #define KROWS 16
 
 /* statuses, reasons and event kinds (decoded by symmech/simulate/csim.py) */
-enum { ST_RUNNING = 0, ST_FINISHED, ST_ZENO, ST_MAX_EVENTS, ST_FAILED };
+enum { ST_RUNNING = 0, ST_FINISHED, ST_ZENO, ST_MAX_EVENTS, ST_FAILED, ST_MAX_STEPS };
 enum {
     R_NONE = 0, R_END, R_MAX_EVENTS, R_SEQUENTIAL, R_ACCUMULATION, R_REST, R_RHS_NONFINITE,
-    R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION
+    R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION, R_MAX_STEPS
 };
 enum { K_IMPACT = 0, K_GRAZING, K_CONTACT, K_RELEASE };
 enum { F_PSI = 0, F_DPSI, F_PSI_T, F_IMPACT, F_ENERGY, F_PROJECT, F_RESIDUAL, F_FORCE };
@@ -91,7 +91,7 @@ typedef struct {
     /* options */
     tableau_t tab;
     double rtol, atol, max_step, fixed_step, t_end, zeno_factor;
-    long max_events;
+    long max_events, max_steps;
     int contact_stop, samples, record;
     const double *P;
     /* work arrays (one allocation) */
@@ -1056,6 +1056,11 @@ static int run(sim_t *s)
         if (s->record && (s->rec_cap - s->nrec < 4 || s->seg_cap - s->nseg < 2
                           || s->ev_cap - s->nev < room_ev))
             return 1;
+        if (s->steps >= s->max_steps) { /* hybrid.py: the bound on work */
+            s->d[0] = s->t;
+            s->d[1] = (double)s->steps;
+            return stop(s, ST_MAX_STEPS, R_MAX_STEPS);
+        }
         if (flow_advance(s)) return 0;
         double te = 0.0;
         int wall = -1, release = 0, found = 0;
@@ -1108,7 +1113,7 @@ static int run(sim_t *s)
 /* ---- the API (ctypes) ---- */
 
 /* options: rtol, atol, max_step, fixed_step (0: adaptive), t_end, zeno_factor, max_events,
-   contact_stop, samples */
+   contact_stop, samples, max_steps */
 void *symmech_bouncing_ball_sim_new(int method, const double *options, const double *P, int record)
 {
     sim_t *s = calloc(1, sizeof(sim_t));
@@ -1123,6 +1128,7 @@ void *symmech_bouncing_ball_sim_new(int method, const double *options, const dou
     s->max_events = (long)options[6];
     s->contact_stop = (int)options[7];
     s->samples = (int)options[8];
+    s->max_steps = (long)options[9];
     s->record = record;
     s->P = P;
     size_t total = (size_t)NA * (KROWS + 7 + 13) + 3 * NF;
