@@ -169,3 +169,15 @@ def test_max_steps_must_be_a_positive_integer(ball, bad):
         sm.simulate(ball, [1.0], [0.0], 1.0, params=P, max_steps=bad)
     with pytest.raises(SimulationError, match="max_steps must be a positive integer"):
         sm.simulate_batch(ball, [[1.0]], [[0.0]], 1.0, params=P, max_steps=bad)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_continuous_output_inside_the_run_and_refused_outside(ball, backend):
+    res = sm.simulate(ball, [1.0], [0.0], 1.0, params=P, backend=backend, rtol=1e-10, atol=1e-12)
+    np.testing.assert_array_equal(res(0.0), [1.0, 0.0])
+    t = 0.3  # before the first impact: free fall
+    np.testing.assert_allclose(res(t), [1 - P["g"] * t * t / 2, -P["g"] * t], atol=1e-9)
+    assert res([0.1, 0.2]).shape == (2, 2)
+    for bad in (-1e-9, 1.0 + 1e-9, math.nan, [0.1, math.nan]):
+        with pytest.raises(ValueError, match="outside the simulated interval"):
+            res(bad)

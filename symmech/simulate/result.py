@@ -160,7 +160,7 @@ class SimulationResult:
         if not self.segments:
             raise ValueError("this result holds no continuous output")
         lo, hi = self.segments[0][0], self.segments[-1][1]
-        if np.any(ts < lo) or np.any(ts > hi):
+        if not np.all((ts >= lo) & (ts <= hi)):  # NaN included
             raise ValueError(f"t outside the simulated interval [{lo!r}, {hi!r}]")
         if self._starts is None:
             self._starts = np.array([float(s[0]) for s in self.segments], dtype=float)
