@@ -46,7 +46,7 @@ def _zero(expr: object) -> bool:
     (:func:`symmech.algebra.zero.is_zero`)."""
     if isinstance(expr, sp.MatrixBase):
         return all(_zero(e) for e in expr)
-    return is_zero(sp.sympify(expr)) is True
+    return is_zero(sp.sympify(expr, strict=True)) is True
 
 
 def _result(ok: bool, what: str) -> tuple[bool, str]:

@@ -231,7 +231,7 @@ def expanded_terms(expr: sp.Basic, cap: int = 10**9) -> tuple[int, int]:
         memo[e] = out
         return out
 
-    return visit(sp.sympify(expr))
+    return visit(sp.sympify(expr, strict=True))
 
 
 def _binomial(n: int, k: int, cap: int) -> int:

@@ -112,7 +112,7 @@ def _clean(e: sp.Expr, simplify: bool) -> sp.Expr:
     exact but not normalised, when its expansion is over :data:`symmech.algebra.budget.FIELD_TERMS`
     (the bound the fraction field declines at: ``cancel`` of such a coefficient takes
     minutes, and the callers decide zero by exact evaluation instead)."""
-    e = sp.sympify(e)
+    e = sp.sympify(e, strict=True)
     if e == 0 or e.is_number:
         return e
     if limits.expanded_terms(e, cap=limits.FIELD_TERMS + 1)[0] > limits.FIELD_TERMS:

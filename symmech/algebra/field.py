@@ -104,7 +104,7 @@ def _generators(exprs: Sequence[sp.Expr]) -> dict[sp.Basic, sp.Expr]:
             visit(arg)
 
     for e in exprs:
-        visit(sp.sympify(e))
+        visit(sp.sympify(e, strict=True))
     return table
 
 
@@ -118,7 +118,7 @@ class RationalField:
     def __init__(self, exprs: Sequence[sp.Expr]):
         # distinct entries only: the work follows the structure (an identity metric of
         # any size has the two entries 0 and 1)
-        exprs = list(dict.fromkeys(sp.sympify(e) for e in exprs))
+        exprs = list(dict.fromkeys(sp.sympify(e, strict=True) for e in exprs))
         exprs = [_sin_cos(e) for e in exprs]
         self.forward = _generators(exprs)
         self.back = {}
@@ -130,7 +130,7 @@ class RationalField:
                 self.back[value.base if isinstance(value, sp.Pow) else value] = base ** sp.Rational(
                     1, q
                 )
-        replaced = [sp.sympify(e).xreplace(self.forward) for e in exprs] or [sp.S.One]
+        replaced = [sp.sympify(e, strict=True).xreplace(self.forward) for e in exprs] or [sp.S.One]
         # sin(a) and cos(a) always come in pairs, so the reduction is canonical
         for key in list(self.forward):
             if isinstance(key, (sp.sin, sp.cos)):
@@ -164,11 +164,11 @@ class RationalField:
 
     # -- conversion ---------------------------------------------------------------
     def _in(self, e: sp.Expr) -> sp.Expr:
-        e = sp.sympify(e)
+        e = sp.sympify(e, strict=True)
         return _sin_cos(e).xreplace(self.forward)
 
     def _out(self, e: sp.Expr) -> sp.Expr:
-        return sp.sympify(e).xreplace(self.back) if self.back else e
+        return sp.sympify(e, strict=True).xreplace(self.back) if self.back else e
 
     @property
     def exact(self) -> bool:
@@ -193,7 +193,7 @@ class RationalField:
         return DomainMatrix(rows, M.shape, self.K)
 
     def scalar(self, e: sp.Expr):
-        e = sp.sympify(e)
+        e = sp.sympify(e, strict=True)
         return e if self.K is None else self.K.from_sympy(self._in(e))
 
     def to_sympy_matrix(self, M) -> sp.Matrix:
@@ -410,7 +410,7 @@ _RECIPROCAL = {
 def _sin_cos(e: sp.Expr) -> sp.Expr:
     """tan, cot, sec and csc written with sin and cos (identities), so that the
     Pythagorean reduction sees them."""
-    e = sp.sympify(e)
+    e = sp.sympify(e, strict=True)
     if not e.has(*_RECIPROCAL):
         return e
     return e.replace(lambda x: type(x) in _RECIPROCAL, lambda x: _RECIPROCAL[type(x)](x.args[0]))
@@ -453,7 +453,9 @@ def common_domain(
     matrices: Sequence[sp.MatrixBase], scalars: Sequence[sp.Expr] = ()
 ) -> RationalField:
     """A domain holding every entry of ``matrices`` and every scalar."""
-    exprs = [sp.sympify(e) for M in matrices for e in M] + [sp.sympify(s) for s in scalars]
+    exprs = [sp.sympify(e, strict=True) for M in matrices for e in M] + [
+        sp.sympify(s, strict=True) for s in scalars
+    ]
     return RationalField(exprs)
 
 
@@ -461,7 +463,7 @@ def field_zero(e: sp.Expr) -> bool:
     """True when ``e`` is zero in the Pythagorean normal form of its own field (exact: a
     "zero" is a proof, for functions and radicals are generators the true ones specialise);
     False when that form is not zero or the field declines (no decision)."""
-    e = sp.sympify(e)
+    e = sp.sympify(e, strict=True)
     if e == 0:
         return True
     field = RationalField([e])

@@ -182,7 +182,7 @@ def _reason(exc: BaseException) -> str:
 def evaluate(expr: sp.Basic, point: Mapping) -> complex:
     """``expr`` at ``point`` (atom -> number) as a complex float; raises EvaluationError."""
     try:
-        return _eval(sp.sympify(expr), dict(point), {})
+        return _eval(sp.sympify(expr, strict=True), dict(point), {})
     except _ARITHMETIC as exc:
         raise EvaluationError(_reason(exc)) from None
 
@@ -407,7 +407,7 @@ def _mp_eval(expr: sp.Basic, env: Mapping, memo: dict) -> tuple[mpmath.mpc, mpma
         return hit
     value = env.get(expr)
     if value is not None:
-        val = _mp_number(sp.sympify(value))
+        val = _mp_number(sp.sympify(value, strict=True))
         size = abs(val)
     elif expr.is_Number or expr.is_NumberSymbol or expr is sp.I or expr is sp.zoo:
         val = _mp_number(expr)
@@ -493,7 +493,7 @@ def vanishes(expr: sp.Basic, points: Sequence[Mapping], digits: int = MP_DIGITS)
     taken to vanish identically.  Its cost is a walk of the tree per point, whatever the
     expression (``sympy.simplify`` can take minutes on a few hundred operations).
     """
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     if expr == 0:
         return True
     if expr.is_Number:

@@ -69,7 +69,7 @@ def check_level(level: object, where: str, argument: str = "simplify") -> Level:
 def tidy(expr: sp.Expr, level: Level = "light") -> sp.Expr:
     """Simplify ``expr`` according to ``level`` (see the module docstring)."""
     check_level(level, "tidy", "level")
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     if level == "none" or expr.is_number or expr.is_Symbol:
         return expr
     if not _small(expr, limits.LIGHT_SIMPLIFY_OPS):
@@ -102,7 +102,7 @@ def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
     :data:`symmech.algebra.budget.LIGHT_SIMPLIFY_OPS`), numbers, and expressions admitting no exact
     field are returned as given, then passed to ``factor_terms``.
     """
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     max_ops = limits.LIGHT_SIMPLIFY_OPS if max_ops is None else max_ops
     if expr.is_number or expr.is_Symbol or not _small(expr, max_ops):
         return expr
@@ -134,7 +134,7 @@ def simplify_all(exprs: Sequence[sp.Expr], level: Level) -> list[sp.Expr]:
     :func:`normal_form`, ``"full"`` :func:`normal_form` then :func:`polish`."""
     check_level(level, "simplify_all", "level")
     if level == "none":
-        return [sp.sympify(e) for e in exprs]
+        return [sp.sympify(e, strict=True) for e in exprs]
     return [polish(normal_form(e), level) for e in exprs]
 
 

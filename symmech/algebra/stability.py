@@ -136,7 +136,7 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     >>> stable_coefficient(I/m - I**2*R**2/I1**2 - I**3/(m*I1**2))
     I*R**2/(I + R**2*m)
     """
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     if expr.is_number or expr.is_Symbol:
         return sp.nsimplify(expr) if isinstance(expr, sp.Float) else expr
     limits.checkpoint()
@@ -252,7 +252,7 @@ def stable_linear(
     Each coefficient ``c_j`` goes through :func:`stable_coefficient`; the velocities are
     not put over a common denominator.  Raises ``ValueError`` if ``expr`` is not affine.
     """
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     v = list(velocities)
     present = [vj for vj in v if vj in expr.free_symbols]
     if not present:

@@ -68,7 +68,7 @@ def zero_verdict(expr: sp.Basic, points: Sequence[Mapping] | None = None) -> Zer
     ``points`` are the sample points of route 4 (values for every atom of ``expr``); by
     default a few random rational points are drawn with a fixed seed.
     """
-    e = sp.sympify(expr)
+    e = sp.sympify(expr, strict=True)
     if e == 0:
         return ZeroVerdict(True, "structure")
     if e.is_Rational:

@@ -94,7 +94,7 @@ def _energy(scene: Scene, params: dict[str, float], q: np.ndarray, v: np.ndarray
     subs = {p: params[str(p)] for p in scene.parameters}
     subs.update(dict(zip(scene.coordinates, q, strict=True)))
     subs.update(dict(zip(scene.velocities, v, strict=True)))
-    return float(sp.sympify(scene.energy()).xreplace(subs))
+    return float(sp.sympify(scene.energy(), strict=True).xreplace(subs))
 
 
 def mass_ratio(backend: str) -> Iterator[StressResult]:

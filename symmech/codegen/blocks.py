@@ -61,7 +61,7 @@ def vector_block(name: str, x: sp.MatrixBase | Sequence[sp.Expr]) -> Block:
 
 def scalar_block(name: str, e: sp.Expr) -> Block:
     """A scalar block of shape ()."""
-    return Block(name, (), (sp.sympify(e),))
+    return Block(name, (), (sp.sympify(e, strict=True),))
 
 
 def wall_ids(names: Sequence[str]) -> tuple[str, ...]:

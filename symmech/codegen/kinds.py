@@ -481,7 +481,7 @@ def impact_scalars(w: ResolvedWall, psi_t: sp.Expr) -> Block:
     """The scalars of the KKT impact: alpha, psi_t, and with a declared wall velocity W
     the values ``nu W`` the impulsive constraints hold v+ to (Carnot paper eq. 20; the
     default W gives them from the Gram matrix in the generated code)."""
-    values = [sp.sympify(w.restitution), psi_t]
+    values = [sp.sympify(w.restitution, strict=True), psi_t]
     if w.velocity is not None and w.impulsive_matrix.rows:
         values += list(sp.Matrix(w.impulsive_matrix) * sp.Matrix(w.velocity))
     return Block("s", (len(values),), tuple(values))

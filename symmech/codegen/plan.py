@@ -57,7 +57,9 @@ from symmech.codegen.blocks import (
 )
 from symmech.codegen.closed_form_budget import closed_form_cost
 from symmech.codegen.kinds import SCENE_BUILDERS, WALL_BUILDERS, BuildContext
+from symmech.declaration.expressions import to_expression
 from symmech.declaration.symbols import t as TIME
+from symmech.errors import SymmechError
 
 if TYPE_CHECKING:
     from symmech.scene import Scene
@@ -202,7 +204,7 @@ class _Inputs:
         return (atom.func.__name__, 0)
 
     def substitute(self, e: sp.Expr) -> sp.Expr:
-        e = sp.sympify(e)
+        e = sp.sympify(e, strict=True)
         if self.definitions:
             e = e.subs(self.definitions).doit()
         found = atoms(e, (sp.Derivative, AppliedUndef))  # one walk over distinct subtrees
@@ -232,6 +234,46 @@ class _Inputs:
     def ordered(self) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
         items = sorted(self.slots.items(), key=lambda kv: self._key(kv[0]))
         return tuple((d, a) for a, d in items)
+
+
+def _definitions(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Expr]:
+    """``definitions`` as ``{f(t): expression}``.  A key is ``f``, ``f(t)`` or the name
+    ``"f"`` of a function of t in the scene (matched by name); a value is a sympy
+    expression, a number, or text parsed safely
+    (:func:`symmech.declaration.expressions.to_expression`, never evaluated) in ``t`` and
+    the scene's parameters."""
+    names = {"t": TIME, **{str(p): p for p in scene.parameters}}
+    d = scene.declaration
+    fields: list[sp.Basic] = [d.metric, d.potential, d.forces, d.constraint_matrix]
+    fields += [d.frame] if d.frame is not None else []
+    for w in d.walls:
+        fields += [w.psi, w.impulsive_matrix, sp.sympify(w.restitution, strict=True)]
+        fields += [w.velocity] if w.velocity is not None else []
+    present = {a for e in fields for a in atoms(e, (AppliedUndef,)) if a.args == (TIME,)}
+    out: dict[sp.Expr, sp.Expr] = {}
+    for key, value in definitions.items():
+        if isinstance(key, str) and key.isidentifier():
+            name = key
+        elif isinstance(key, sp.FunctionClass):
+            name = key.__name__
+        elif isinstance(key, AppliedUndef) and key.args == (TIME,):
+            name = key.func.__name__
+        else:
+            raise CodegenError(f"definitions: {key!r} is not an arbitrary function of t")
+        # by name: the scene's f(t) whatever its assumptions (a scene file's is real)
+        fs = [a for a in present if a.func.__name__ == name]
+        if not fs:
+            known = sorted({a.func.__name__ for a in present})
+            raise CodegenError(
+                f"definitions[{name!r}]: scene {scene.name!r} has no function {name}(t)"
+                f" (its functions of t: {known})"
+            )
+        try:
+            e = to_expression(value, names, field=f"definitions[{name!r}]")
+        except SymmechError as exc:
+            raise CodegenError(str(exc)) from None
+        out.update(dict.fromkeys(fs, e))
+    return out
 
 
 def _check_constants(scene: Scene, constants: Mapping) -> dict[sp.Symbol, sp.Expr]:
@@ -339,13 +381,7 @@ def _build(
     # with k = 2.0 is x**2 and the folding of constants rounds once, at printing
     exact = {s: sp.Rational(val) if isinstance(val, sp.Float) else val for s, val in baked.items()}
     runtime = tuple(p for p in scene.parameters if p not in baked)
-    defs: dict = {}
-    for key, value in definitions.items():
-        f = key(TIME) if isinstance(key, sp.FunctionClass) else key
-        if not isinstance(f, AppliedUndef):
-            raise CodegenError(f"definitions: {key!r} is not an arbitrary function of t")
-        defs[f] = sp.sympify(value)
-    inputs = _Inputs(defs)
+    inputs = _Inputs(_definitions(scene, definitions))
     q, v = scene.coordinates, scene.velocities
     omitted: list[str] = [fallback] if fallback else []
     plans: list[FunctionPlan] = []
@@ -448,7 +484,7 @@ def _build(
         omitted.append("psi, dpsi, impact maps: the scene has no walls")
     if ctx.closed:
         omitted.append("linear-algebra routines: strategy closed_form evaluates closed forms")
-    if sp.sympify(scene.potential) == 0:
+    if sp.sympify(scene.potential, strict=True) == 0:
         omitted.append("potential terms: V = 0")
     if not any(p.uses_time for p in plans):
         omitted.append("time argument t: nothing depends on t")

@@ -104,7 +104,7 @@ def correctly_rounded(value: sp.Expr) -> float:
     unless ``value`` lies within ``10^-40`` (relative) of a midpoint between two doubles.
     Raises ``ValueError`` if ``value`` is not a finite real number.
     """
-    v = sp.sympify(value)
+    v = sp.sympify(value, strict=True)
     if v.is_Rational:
         x = float(Fraction(int(v.p), int(v.q)))
     else:
@@ -188,7 +188,7 @@ def fold_numbers(expr: sp.Expr) -> sp.Expr:
         args = [go(a) for a in e.args]
         return e if same(args, e.args) else e.func(*args)
 
-    return go(sp.sympify(expr))
+    return go(sp.sympify(expr, strict=True))
 
 
 def product_power(k: sp.Expr) -> bool:
@@ -239,7 +239,7 @@ def safe_rewrite(expr: sp.Expr) -> sp.Expr:
     Each rewrite runs only when its function occurs: sympy's ``expm1`` optimisation calls
     ``factor`` on the whole expression, which takes minutes on a multibody forcing term.
     """
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     if expr.is_Atom:
         return expr
     expm1_opt, log1p_opt = optims_c99[:2]

@@ -202,7 +202,7 @@ def lower_bound(expr: sp.Expr, fixed: Mapping) -> mpmath.mpf | None:
     """
     try:
         with mpmath.workprec(53):
-            bound = _interval(sp.sympify(expr), fixed, {})
+            bound = _interval(sp.sympify(expr, strict=True), fixed, {})
     except (ArithmeticError, ValueError, TypeError, RecursionError):
         return None
     if bound is None:

@@ -228,7 +228,7 @@ def metric_from_kinetic_energy(
     """
     index = {s: i for i, s in enumerate(v)}
     out: dict[tuple[int, int], list[_Term]] = defaultdict(list)
-    _hessian(sp.sympify(T), index, out, (1, ()))
+    _hessian(sp.sympify(T, strict=True), index, out, (1, ()))
     n = len(v)
     qset = frozenset(q)
     G = sp.zeros(n, n)

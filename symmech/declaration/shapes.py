@@ -47,9 +47,21 @@ __all__ = [
 _AXES = {"x": 0, "y": 1, "z": 2}
 
 
+def _scalar(value: object, what: str) -> sp.Expr:
+    """``value`` (a number or a sympy expression) as sympy, never parsed: text is refused
+    (:func:`symmech.parse_expression` reads text safely)."""
+    try:
+        return sp.sympify(value, strict=True)
+    except sp.SympifyError:
+        raise SceneError(
+            f"{what}: expected a number or a sympy expression, got {value!r}"
+            " (for text, use symmech.parse_expression)"
+        ) from None
+
+
 def _vector(value: Sequence, dim: int | None, what: str) -> tuple[sp.Expr, ...]:
     try:
-        vec = tuple(sp.sympify(e) for e in value)
+        vec = tuple(sp.sympify(e, strict=True) for e in value)
     except (TypeError, sp.SympifyError):
         raise SceneError(f"{what}: expected a sequence of coordinates, got {value!r}") from None
     if dim is not None and len(vec) != dim:
@@ -95,7 +107,7 @@ class Plane:
         if side not in (1, -1):
             raise SceneError(f"plane axis: side must be 1 or -1, got {side!r}")
         point = [sp.S.Zero] * dim
-        point[_AXES[axis]] = sp.sympify(at)
+        point[_AXES[axis]] = _scalar(at, "plane axis: at")
         normal = [sp.S.Zero] * dim
         normal[_AXES[axis]] = sp.Integer(side)
         return cls(point, normal)
@@ -122,7 +134,7 @@ def _plane(plane: Plane | None, dim: int) -> Plane:
 
 
 def _positive(value: object, what: str) -> sp.Expr:
-    e = sp.sympify(value)
+    e = _scalar(value, what)
     if e.is_number and not e.is_positive:
         raise SceneError(f"{what} must be positive, got {e}")
     if e.is_nonpositive:
@@ -146,7 +158,7 @@ def ellipse_support(semi_axes: Sequence, angle: object, direction: Sequence) -> 
     """Support function ``h(u) = sqrt(a^2 (u.e1)^2 + b^2 (u.e2)^2)`` of the ellipse with
     semi-axes (a, b) rotated by ``angle``, in the direction u (not necessarily unit)."""
     a, b = (_positive(s, "ellipse semi-axis") for s in semi_axes)
-    th = sp.sympify(angle)
+    th = _scalar(angle, "ellipse angle")
     ux, uy = _vector(direction, 2, "direction")
     u1 = ux * sp.cos(th) + uy * sp.sin(th)
     u2 = -ux * sp.sin(th) + uy * sp.cos(th)
@@ -178,7 +190,7 @@ def ellipse_contact_point(
     """
     pl = _plane(plane, 2)
     a, b = (_positive(s, "ellipse semi-axis") for s in semi_axes)
-    th = sp.sympify(angle)
+    th = _scalar(angle, "ellipse angle")
     cx, cy = _vector(center, 2, "center")
     ux, uy = (-e for e in pl.normal)
     c, s = sp.cos(th), sp.sin(th)

@@ -368,7 +368,7 @@ def declare(
                 )
         alpha = Field(
             f"{label}.restitution",
-            sp.sympify(w.restitution),
+            sp.sympify(w.restitution, strict=True),
             frozenset(),
             key=f"{key}.restitution",
         )
@@ -484,7 +484,7 @@ def declare(
         coordinate_velocities=qd,
         frame=sp.ImmutableMatrix(S) if S is not None else None,
         metric=sp.ImmutableMatrix(G),
-        potential=sp.sympify(V),
+        potential=sp.sympify(V, strict=True),
         forces=sp.ImmutableMatrix(F),
         constraint_matrix=sp.ImmutableMatrix(mu),
         walls=walls_out,

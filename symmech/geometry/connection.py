@@ -245,7 +245,7 @@ def forcing(
                 if w == 0:
                     continue
                 terms.append(w * v[i] ** 2 if i == j else 2 * w * v[i] * v[j])
-        rows.append(tidy(-sp.Add(*terms) - D(sp.sympify(V), k), level))
+        rows.append(tidy(-sp.Add(*terms) - D(sp.sympify(V, strict=True), k), level))
     return sp.Matrix(rows)
 
 
@@ -298,7 +298,7 @@ def _forcing_coordinates(
     rows = []
     for k in range(n):
         terms = [mul(add(*coefs), v[i], v[j]) for (i, j), coefs in acc[k].items()]
-        dV = D(sp.sympify(V), k)
+        dV = D(sp.sympify(V, strict=True), k)
         rows.append(tidy(_minus(add(*terms), dV), level))
     return sp.Matrix(rows)
 

@@ -87,7 +87,7 @@ def _component(c: Any, name: str, where: str) -> sp.Expr:
     if isinstance(c, sp.Expr):
         return c
     if isinstance(c, numbers.Number) and not isinstance(c, bool):
-        return sp.sympify(c)
+        return sp.sympify(c, strict=True)
     raise SceneError(
         f"{where}: component {name} = {c!r} ({type(c).__name__}) is not a sympy expression"
     )

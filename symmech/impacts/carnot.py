@@ -194,7 +194,7 @@ def carnot_residual(
 ) -> CarnotResult:
     """Residual of the applicable Carnot theorem (see the module docstring for the table
     and for how "identically zero" is decided)."""
-    a = sp.sympify(alpha)
+    a = sp.sympify(alpha, strict=True)
     l = proj.nu.rows
     matrix, offset, W = sp.Matrix(matrix), sp.Matrix(offset), sp.Matrix(W)
     prime = "'" if moving else ""

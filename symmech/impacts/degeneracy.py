@@ -243,7 +243,7 @@ Description = str | Callable[[sp.Expr], str]
 def _factors(expr: sp.Expr) -> list[sp.Expr]:
     """The non-constant irreducible factors of the numerator of ``expr`` (the numerator
     itself, with its numeric content removed, when it is too large to factor)."""
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     if sp.count_ops(expr) > FACTOR_MAX_OPS:
         num = sp.fraction(sp.together(expr))[0]
         return [sp.factor_terms(num).as_coeff_Mul()[1]] if num.free_symbols else []
@@ -275,7 +275,7 @@ def pythagorean(f: sp.Expr) -> sp.Expr:
     """f with ``sin(u)^2`` replaced by ``1 - cos(u)^2`` wherever both ``sin(u)`` and
     ``cos(u)`` occur (the remainder modulo ``sin(u)^2 + cos(u)^2 - 1``, degree <= 1 in
     each such sin(u)); f itself when it is not small or not polynomial in them."""
-    f = sp.sympify(f)
+    f = sp.sympify(f, strict=True)
     if sp.count_ops(f) > FACTOR_MAX_OPS:
         return f
     sines = {e.args[0]: e for e in f.atoms(sp.sin)}
@@ -315,7 +315,7 @@ def no_real_zeros(f: sp.Expr) -> bool:
     with positive k, a sum of squares plus a positive constant), or f is a polynomial in
     one real symbol with no real root, or in one ``sin(u)``/``cos(u)`` (u real) with no
     root in [-1, 1] (counted exactly by Sturm sequences)."""
-    f = sp.sympify(f)
+    f = sp.sympify(f, strict=True)
     if f == 0:
         return False
     if not f.free_symbols or f.is_nonzero:
@@ -467,7 +467,7 @@ def impact_singularities(
                 structural.append((sp.Matrix(mu * g.LUsolve(mu.T)).det(), permanent))
             if not never_tangent:
                 structural.append((sp.Matrix(proj.C).det(method="berkowitz"), gram))
-    if sp.sympify(psi_t) != 0 and default_velocity and not nonvanishing:
+    if sp.sympify(psi_t, strict=True) != 0 and default_velocity and not nonvanishing:
         structural.append(((sp.Matrix(proj.dpsi) * sp.Matrix(proj.grad_psi))[0, 0], normal))
     for e in [*g, *proj.dpsi, *proj.nu, *proj.mu, psi_t, *extra]:
         den = sp.fraction(sp.together(e))[1]

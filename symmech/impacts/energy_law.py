@@ -113,7 +113,7 @@ def energy_law(
     for i in range(k - 1):
         squares.append((coeff(d0 / D[i, i]), y[i]))
     speed2 = sp.Add(*[w * f**2 for w, f in squares])
-    s = sp.sympify(alpha) * sp.sqrt(speed2)
+    s = sp.sympify(alpha, strict=True) * sp.sqrt(speed2)
     # u = PP (v - W) = PP v - PP W;  v+ = W + u + s N
     u = sp.Matrix([affine(PPs, uwall, i) for i in range(n)])
     post = sp.Matrix([W[i] + u[i] + Ns[i] * s for i in range(n)])

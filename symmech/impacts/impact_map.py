@@ -190,7 +190,16 @@ class ImpactMap:
                     f"apply: expected {len(self.velocities)} velocity components, got {len(seq)}"
                 )
             values = dict(zip(self.velocities, seq, strict=True))
-        return sp.Matrix(self.post_velocity.xreplace({k: sp.sympify(v) for k, v in values.items()}))
+        rule = {}
+        for k, v in values.items():
+            try:
+                rule[k] = sp.sympify(v, strict=True)
+            except sp.SympifyError:
+                raise ImpactError(
+                    f"apply: the velocity component {k} = {v!r} is not a number or a sympy"
+                    " expression (for text, use symmech.parse_expression)"
+                ) from None
+        return sp.Matrix(self.post_velocity.xreplace(rule))
 
     def energy_change(self, in_D: bool = False) -> sp.Expr:
         """``T(v+) - T(v-)`` with ``T = 1/2 v^T g v`` (velocity basis).
@@ -353,8 +362,8 @@ def derive_impact_map(
     q = declaration.coordinates
     n = declaration.n
     v = declaration.velocities
-    psi = sp.sympify(rw.psi)
-    alpha = sp.sympify(rw.restitution)
+    psi = sp.sympify(rw.psi, strict=True)
+    alpha = sp.sympify(rw.restitution, strict=True)
     row = sp.Matrix([[sp.diff(psi, qi) for qi in q]])
     dpsi = row * sp.Matrix(declaration.frame) if declaration.frame is not None else row
     psi_t = sp.diff(psi, TIME)

@@ -53,7 +53,7 @@ def wall_velocity(proj: ImpactProjectors, psi_t: sp.Expr, level: Level = "light"
     a static wall.
     """
     n = proj.g.rows
-    psi_t = sp.sympify(psi_t)
+    psi_t = sp.sympify(psi_t, strict=True)
     if psi_t == 0:
         return sp.zeros(n, 1)
     Y0 = sp.Matrix(proj.grad_psi)
@@ -82,9 +82,9 @@ def newton_map(
     For a static wall (``psi_t = 0`` and no V given) offset and W are zero.
     """
     n = proj.g.rows
-    alpha = sp.sympify(alpha)
+    alpha = sp.sympify(alpha, strict=True)
     matrix = tidy_matrix(sp.Matrix(proj.PP) - alpha * sp.Matrix(proj.T), level)
-    psi_t = sp.sympify(psi_t)
+    psi_t = sp.sympify(psi_t, strict=True)
     if V is None and psi_t == 0:
         return matrix, sp.zeros(n, 1), sp.zeros(n, 1)
     if V is None:

@@ -120,7 +120,9 @@ class _Model:
             self.holonomic = []  # LagrangesMethod differentiates them into coneqs
             if not self.bodies:
                 L = lm._L
-                self.lagrangian = L[0] if isinstance(L, sp.MatrixBase) else sp.sympify(L)
+                self.lagrangian = (
+                    L[0] if isinstance(L, sp.MatrixBase) else sp.sympify(L, strict=True)
+                )
         else:
             s: Any = model
             self.q = list(s.q)

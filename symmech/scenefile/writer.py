@@ -57,7 +57,7 @@ class _FilePrinter(StrPrinter):
 
 
 def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
-    expr = sp.sympify(expr)
+    expr = sp.sympify(expr, strict=True)
     for fn, rewrite in _REWRITES.items():
         if expr.has(fn):
             expr = expr.replace(fn, rewrite)
@@ -234,7 +234,7 @@ def dump_scene(
         everything.extend([w.psi, *w.impulsive_matrix, *(w.velocity or [])])
     arguments = (TIME, *q)
     for e in everything:
-        for f in sorted(sp.sympify(e).atoms(AppliedUndef), key=sp.default_sort_key):
+        for f in sorted(sp.sympify(e, strict=True).atoms(AppliedUndef), key=sp.default_sort_key):
             _check_function(f, arguments, applied)
             applied[f.func.__name__] = f
     table.update(applied)

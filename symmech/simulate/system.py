@@ -135,7 +135,7 @@ def _rules(scene: Scene) -> _ParameterRules:
         params = list(scene.parameters)
         restitutions = []
         for w in scene.walls:
-            alpha = sp.sympify(w.restitution)
+            alpha = sp.sympify(w.restitution, strict=True)
             fn = sp.lambdify(params, alpha, modules="math")
             restitutions.append((w.name, str(w.restitution), fn))
         rules = _ParameterRules(
