@@ -242,6 +242,8 @@ def _definitions(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Expr]:
     expression, a number, or text parsed safely
     (:func:`symmech.declaration.expressions.to_expression`, never evaluated) in ``t`` and
     the scene's parameters."""
+    if not definitions:
+        return {}
     names = {"t": TIME, **{str(p): p for p in scene.parameters}}
     d = scene.declaration
     fields: list[sp.Basic] = [d.metric, d.potential, d.forces, d.constraint_matrix]
