@@ -497,7 +497,7 @@ int main(void)
     long cap = 64, ecap = 512, counts[3], total = 0;
     for (int method = 0; method < 4; ++method) {
         double opts[] = { 1e-8, 1e-10, TEND / 50, method == 3 ? TEND / 2000 : 0.0, TEND, 100.0,
-                          400.0, 0.0, 8.0 };
+                          400.0, 0.0, 8.0, 1e7 };
         void *s = PREFIXnew(method, opts, P, 1);
         double *rec = malloc(sizeof(double) * cap * (NYV + 1));
         double *seg = malloc(sizeof(double) * cap * (4 + 8 * NYV));
