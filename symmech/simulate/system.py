@@ -101,10 +101,13 @@ def real_values(value: object, what: str) -> np.ndarray:
 
 
 def _number(value: object, what: str) -> float:
-    a = real_values(value, what)
-    if a.ndim != 0:
-        raise SimulationError(f"{what}: expected a real number, got {value!r}")
-    x = float(a)
+    if type(value) is float:  # the common case, exactly this type
+        x = value
+    else:
+        a = real_values(value, what)
+        if a.ndim != 0:
+            raise SimulationError(f"{what}: expected a real number, got {value!r}")
+        x = float(a)
     if not math.isfinite(x):
         raise SimulationError(f"{what}: expected a finite real number, got {value!r}")
     return x
