@@ -491,3 +491,12 @@ def test_an_entry_that_is_not_finite_is_refused_with_its_place(value):
     scene = sm.Scene((x,), metric=sp.eye(1), forces=[f(sm.t)], name="pushed")
     with pytest.raises(codegen.CodegenError, match=r"forcing: out\[0\] is not finite"):
         codegen.generate(scene, "numpy", definitions={f: value})
+
+
+def test_templates_come_from_the_tree_the_code_was_imported_from():
+    """An editable install's templates must not fill the code of another checkout: the
+    template folder is the package's own or the checkout's next to it."""
+    from symmech.codegen import backends
+
+    package = Path(backends.__file__).resolve().parents[1]
+    assert backends.template_root() in (package / "templates", package.parent / "templates")

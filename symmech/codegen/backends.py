@@ -120,19 +120,22 @@ BACKENDS: dict[str, Backend] = {
 
 
 def template_root() -> Path:
-    """The folder of the templates.
+    """The folder of the templates: those of the tree this code was imported from.
 
-    In an installed package they are the package data ``symmech.templates`` (the
-    top-level ``templates/`` folder mapped into the wheel); when symmech is imported from
-    a source checkout (tests run from the repository root), they are that checkout's
-    ``templates/`` folder next to the package.
+    In an installed package they are the package data ``symmech/templates`` (the top-level
+    ``templates/`` folder mapped into the wheel); when symmech is imported from a source
+    checkout (tests run from the repository root, an editable install), they are that
+    checkout's ``templates/`` folder next to the package.  Only when neither exists is
+    the resource ``symmech.templates`` asked for: a template from another installation
+    than the code (an editable install's, while a second checkout is imported) would not
+    match the code that fills it.
     """
-    candidates = []
+    here = Path(__file__).resolve().parents[1]
+    candidates = [here / "templates", here.parent / "templates"]
     try:
         candidates.append(Path(str(importlib.resources.files("symmech.templates"))))
     except ModuleNotFoundError:
         pass
-    candidates.append(Path(__file__).resolve().parents[2] / "templates")
     for path in candidates:
         if (path / "c" / "source.c.jinja").is_file():
             return path
