@@ -181,3 +181,39 @@ def test_continuous_output_inside_the_run_and_refused_outside(ball, backend):
     for bad in (-1e-9, 1.0 + 1e-9, math.nan, [0.1, math.nan]):
         with pytest.raises(ValueError, match="outside the simulated interval"):
             res(bad)
+
+
+@pytest.mark.parametrize(
+    ("option", "bad", "match"),
+    [
+        ("max_events", 2**60, r"max_events must be a positive integer up to 9007199254740992"),
+        ("max_steps", 2**60, r"max_steps must be a positive integer up to"),
+        ("event_samples", 10**7, r"event_samples must be a positive integer up to 1000000"),
+        ("rtol", "1e-8", r"rtol: str '1e-8' is not a real number"),
+        ("t0", "0", r"t0: str '0' is not a real number"),
+    ],
+)
+def test_simulate_batch_and_sweep_check_options_alike(ball, option, bad, match):
+    """Counts the C loop could not hold and text where a number belongs are refused the
+    same way by simulate, simulate_batch and sweep (one rule, simulate.arguments)."""
+    with pytest.raises(SimulationError, match=match):
+        sm.simulate(ball, [1.0], [0.0], 1.0, params=P, **{option: bad})
+    with pytest.raises(SimulationError, match=match):
+        sm.simulate_batch(ball, [[1.0]], [[0.0]], 1.0, params=P, **{option: bad})
+    pytest.importorskip("pandas")
+    with pytest.raises(SimulationError, match=match):
+        sm.sweep(ball, {"q0[0]": [1.0]}, 1.0, v0=[0.0], params=P, **{option: bad})
+
+
+def test_numpy_integers_are_counts(ball):
+    res = sm.simulate(ball, [1.0], [0.0], 3.0, params=P, max_events=np.int64(3), contact="stop")
+    assert res.status == "max_events" and len(res.events) == 3
+
+
+def test_a_sweep_refuses_text_parameters_and_boolean_states(ball):
+    pytest.importorskip("pandas")
+    grid = {"q0[0]": [1.0]}
+    with pytest.raises(SimulationError, match=r"params\['g'\]: str '9.81' is not a real number"):
+        sm.sweep(ball, grid, 1.0, v0=[0.0], params={**P, "g": "9.81"})
+    with pytest.raises(SimulationError, match="v0: bool True is not a real number"):
+        sm.sweep(ball, grid, 1.0, v0=[True], params=P)

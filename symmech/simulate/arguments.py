@@ -16,9 +16,19 @@ from typing import Any
 
 import numpy as np
 
-from symmech.simulate.system import SimulationError, real_values
+from symmech.simulate.system import SimulationError, real_scalar, real_values
 
-__all__ = ["CONTACT_MODES", "RunOptions", "check_run", "numbers", "positive", "states"]
+__all__ = [
+    "CONTACT_MODES",
+    "MAX_COUNT",
+    "MAX_EVENT_SAMPLES",
+    "RunOptions",
+    "check_run",
+    "count",
+    "numbers",
+    "positive",
+    "states",
+]
 
 #: What to do at an accumulation of impacts.
 CONTACT_MODES = ("persistent", "stop")
@@ -43,19 +53,27 @@ class RunOptions:
 
 def positive(value: object, what: str) -> float:
     """``value`` as a finite positive float, or a SimulationError naming ``what``."""
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise SimulationError(f"{what}: expected a positive number, got {value!r}") from exc
+    x = real_scalar(value, what)
     if not (math.isfinite(x) and x > 0):
         raise SimulationError(f"{what}: expected a finite positive number, got {value!r}")
     return x
 
 
-def _count(value: object, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+#: Largest count an option may hold: exact in a double and in the C loop's ``long``.
+MAX_COUNT = 2**53
+
+#: Largest ``event_samples``: each step evaluates every event function that many times.
+MAX_EVENT_SAMPLES = 10**6
+
+
+def count(value: object, what: str, limit: int = MAX_COUNT) -> int:
+    """``value`` as an int in ``[1, limit]`` (Python or NumPy integers; not bool), or a
+    SimulationError naming ``what``."""
+    if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer):
         raise SimulationError(f"{what} must be a positive integer, got {value!r}")
-    return value
+    if not 1 <= int(value) <= limit:
+        raise SimulationError(f"{what} must be a positive integer up to {limit}, got {value!r}")
+    return int(value)
 
 
 def states(value: object, n: int, what: str, *, rows: bool = False) -> np.ndarray:
@@ -93,10 +111,7 @@ def check_run(
     """The checked options (see the module docstring)."""
     if contact not in CONTACT_MODES:
         raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
-    try:
-        t0f, tend = float(t0), float(t_end)
-    except (TypeError, ValueError) as exc:
-        raise SimulationError(f"t0 and t_end must be numbers, got {t0!r}, {t_end!r}") from exc
+    t0f, tend = real_scalar(t0, "t0"), real_scalar(t_end, "t_end")
     if not (math.isfinite(t0f) and math.isfinite(tend)):
         raise SimulationError(f"t0 and t_end must be finite, got {t0!r}, {t_end!r}")
     if not tend > t0f:
@@ -115,10 +130,10 @@ def check_run(
         rtol=rtol_f,
         atol=positive(atol, "atol"),
         max_step=tend - t0f if max_step is None else positive(max_step, "max_step"),
-        max_events=_count(max_events, "max_events"),
-        event_samples=_count(event_samples, "event_samples"),
+        max_events=count(max_events, "max_events"),
+        event_samples=count(event_samples, "event_samples", MAX_EVENT_SAMPLES),
         contact=contact,
-        max_steps=_count(max_steps, "max_steps"),
+        max_steps=count(max_steps, "max_steps"),
     )
 
 

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.arguments import check_run, states
+from symmech.simulate.arguments import check_run, count, states
 from symmech.simulate.csim import (
     FINISHED_CODE,
     INFO_HEAD,
@@ -128,8 +128,7 @@ def simulate_batch(
     t0f, tend, rtol_f, atol_f = o.t0, o.t_end, o.rtol, o.atol
     if threads is None:
         threads = os.cpu_count() or 1
-    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
-        raise SimulationError(f"threads must be a positive integer, got {threads!r}")
+    threads = count(threads, "threads")
     values = check_parameters(scene, params)
     system = system_for(scene, "c", strategy, definitions)
     fns = Functions(system, values)

@@ -48,7 +48,15 @@ from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
 
-__all__ = ["BACKENDS", "HybridSystem", "SimulationError", "contact_scene"]
+__all__ = [
+    "BACKENDS",
+    "HybridSystem",
+    "SimulationError",
+    "contact_scene",
+    "real_number",
+    "real_scalar",
+    "real_values",
+]
 
 #: Backends of the simulator: the loop in generated C, in Python over the generated NumPy
 #: module, or in Python around SciPy's ``OdeSolver`` classes over the generated C rhs.
@@ -100,14 +108,19 @@ def real_values(value: object, what: str) -> np.ndarray:
         raise SimulationError(str(exc)) from None
 
 
-def _number(value: object, what: str) -> float:
+def real_scalar(value: object, what: str) -> float:
+    """One real number (by :func:`real_values`' rule) as a float, finite or not."""
     if type(value) is float:  # the common case, exactly this type
-        x = value
-    else:
-        a = real_values(value, what)
-        if a.ndim != 0:
-            raise SimulationError(f"{what}: expected a real number, got {value!r}")
-        x = float(a)
+        return value
+    a = real_values(value, what)
+    if a.ndim != 0:
+        raise SimulationError(f"{what}: expected a real number, got {value!r}")
+    return float(a)
+
+
+def real_number(value: object, what: str) -> float:
+    """One finite real number (by :func:`real_values`' rule) as a float."""
+    x = real_scalar(value, what)
     if not math.isfinite(x):
         raise SimulationError(f"{what}: expected a finite real number, got {value!r}")
     return x
@@ -185,7 +198,7 @@ def _checked_parameters(rules: _ParameterRules, params: object) -> dict[str, flo
         raise SimulationError(
             f"params: missing {missing}, unknown {unknown}; the scene's parameters are {names}"
         )
-    out = {n: _number(given[n], f"params[{n!r}]") for n in names}
+    out = {n: real_number(given[n], f"params[{n!r}]") for n in names}
     for name, pos, nonneg in zip(names, rules.positive, rules.nonnegative, strict=True):
         x = out[name]
         if pos and not x > 0:

@@ -24,7 +24,6 @@ kind) and the chosen ``outputs`` and ``expressions``, indexed by ``run`` (the gr
 from __future__ import annotations
 
 import hashlib
-import math
 import os
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -36,10 +35,11 @@ from symmech.declaration.expressions import parse_expression
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
+from symmech.simulate.arguments import check_run, count, states
 from symmech.simulate.csim import INFO_HEAD, library, options_vector
 from symmech.simulate.hybrid import Options
-from symmech.simulate.run import CONTACT_MODES, system_for
-from symmech.simulate.system import Functions, SimulationError
+from symmech.simulate.run import system_for
+from symmech.simulate.system import Functions, SimulationError, real_number
 from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
 from symmech.sweep.grid import read_grid, resolve_columns
 from symmech.sweep.runner import Progress, run_dask, run_local
@@ -57,64 +57,38 @@ OUTPUTS = ("energy", "gap", *INFO_OUTPUTS)
 MAX_CHUNK = 10_000
 
 
-def _real(value: object, what: str) -> float:
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, OverflowError):
-        raise SimulationError(f"{what}: expected a real number, got {value!r}") from None
-    if isinstance(value, complex) or not math.isfinite(x):
-        raise SimulationError(f"{what}: expected a finite real number, got {value!r}")
-    return x
-
-
-def _positive_int(value: object, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or int(value) < 1:
-        raise SimulationError(f"{what} must be a positive integer, got {value!r}")
-    return int(value)
-
-
 def _base_state(value: object, n: int, what: str) -> np.ndarray:
-    if value is None:
-        return np.full(n, np.nan)
-    a = np.asarray(value)
-    if a.dtype.kind not in "biuf" or a.shape != (n,):
-        raise SimulationError(f"{what}: expected {n} real numbers, got {value!r}")
-    a = a.astype(np.float64)
-    if not np.all(np.isfinite(a)):
-        raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
-    return a
+    return np.full(n, np.nan) if value is None else states(value, n, what)
 
 
 def _loop(
     t0: float, t_end: float, rtol: float, atol: float, max_step: float | None,
     max_events: int, max_steps: int, contact: str, samples: int, method: str, width: int,
 ) -> tuple[Options, LoopOptions]:  # fmt: skip
-    """The sweep-wide options, checked as :func:`symmech.simulate.simulate` checks them."""
-    t0f, tend = _real(t0, "t0"), _real(t_end, "t_end")
-    if not tend > t0f:
-        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
-    rtol_f, atol_f = _real(rtol, "rtol"), _real(atol, "atol")
-    eps = float(np.finfo(float).eps)
-    if not 100 * eps <= rtol_f < 1:
-        raise SimulationError(f"rtol must lie in [{100 * eps:.3g}, 1), got {rtol!r}")
-    if not atol_f > 0:
-        raise SimulationError(f"atol must be positive, got {atol!r}")
-    cap = tend - t0f if max_step is None else _real(max_step, "max_step")
-    if not cap > 0:
-        raise SimulationError(f"max_step must be positive, got {max_step!r}")
-    if contact not in CONTACT_MODES:
-        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
-    opts = Options(
-        t_end=tend,
-        rtol=rtol_f,
-        atol=atol_f,
-        max_events=_positive_int(max_events, "max_events"),
+    """The sweep-wide options, checked by :func:`symmech.simulate.arguments.check_run`
+    as for :func:`symmech.simulate.simulate`."""
+    o = check_run(
+        t0=t0,
+        t_end=t_end,
+        rtol=rtol,
+        atol=atol,
+        max_step=max_step,
+        max_events=max_events,
+        event_samples=samples,
         contact=contact,
-        samples=_positive_int(samples, "event_samples"),
-        max_steps=_positive_int(max_steps, "max_steps"),
+        max_steps=max_steps,
     )
-    index, vec = options_vector(opts, method, cap, t0f)
-    return opts, LoopOptions(t0=t0f, method=index, vector=vec, width=width)
+    opts = Options(
+        t_end=o.t_end,
+        rtol=o.rtol,
+        atol=o.atol,
+        max_events=o.max_events,
+        contact=o.contact,
+        samples=o.event_samples,
+        max_steps=o.max_steps,
+    )
+    index, vec = options_vector(opts, method, o.max_step, o.t0)
+    return opts, LoopOptions(t0=o.t0, method=index, vector=vec, width=width)
 
 
 def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, sp.Expr]:
@@ -232,7 +206,7 @@ def sweep(
     unknown = sorted(str(k) for k in given if str(k) not in pnames)
     if unknown:
         raise SimulationError(f"params: unknown {unknown}; the scene's parameters are {pnames}")
-    base_params = {str(k): _real(v, f"params[{str(k)!r}]") for k, v in given.items()}
+    base_params = {str(k): real_number(v, f"params[{str(k)!r}]") for k, v in given.items()}
     set_p = {pnames[i] for i in columns.params if i >= 0}
     missing = [p for p in pnames if p not in base_params and p not in set_p]
     base_q = _base_state(q0, n, "q0")
@@ -266,7 +240,7 @@ def sweep(
         raise SimulationError(f"store: expected a folder path, got {store!r}")
     if threads is None:
         threads = os.cpu_count() or 1
-    threads = _positive_int(threads, "threads")
+    threads = count(threads, "threads")
     if client is not None and not (hasattr(client, "submit") and hasattr(client, "scatter")):
         raise SimulationError(
             f"client: expected a dask.distributed.Client, got {type(client).__name__}"
@@ -313,7 +287,7 @@ def _execute(
         chunk = Store.stored_chunk(store)
     if chunk is None:
         chunk = max(1, min(MAX_CHUNK, -(-N // (4 * workers))))
-    chunk = _positive_int(chunk, "chunk")
+    chunk = count(chunk, "chunk")
     fingerprint = _fingerprint(plan, table, chunk, expressions)
     schema = plan.schema()
     chunks = [(k, lo, min(lo + chunk, N)) for k, lo in enumerate(range(0, N, chunk))]
