@@ -217,3 +217,29 @@ def test_a_sweep_refuses_text_parameters_and_boolean_states(ball):
         sm.sweep(ball, grid, 1.0, v0=[0.0], params={**P, "g": "9.81"})
     with pytest.raises(SimulationError, match="v0: bool True is not a real number"):
         sm.sweep(ball, grid, 1.0, v0=[True], params=P)
+
+
+def test_definitions_that_print_alike_are_not_confused_by_the_system_cache():
+    """{"f": 2 + r sin(t)} with the scene's r, then with a plain Symbol("r") (which prints
+    the same): the second is not the scene's parameter and is refused, not served the
+    first one's compiled system."""
+    from symmech.codegen import CodegenError
+
+    scene = sm.load_scene("carnot_4_4")
+    params = {"alpha": 0.5, "k": math.sqrt(0.1), "r": 0.5}
+    q0, v0 = [5, 0, 0, 0.3, 1.0, 0.2], [-1.0, 0, 0, 0, -2.0, 0]
+    r = next(p for p in scene.parameters if str(p) == "r")
+    ok = sm.simulate(
+        scene, q0, v0, 4.0, params=params, backend="numpy", definitions={"f": 2 + r * sp.sin(sm.t)}
+    )
+    assert ok.status == "finished" and len(ok.impacts()) == 1
+    with pytest.raises(CodegenError, match=r"symbols \['r'\] are neither state nor parameters"):
+        sm.simulate(
+            scene,
+            q0,
+            v0,
+            4.0,
+            params=params,
+            backend="numpy",
+            definitions={"f": 2 + sp.Symbol("r") * sp.sin(sm.t)},
+        )

@@ -22,6 +22,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+import sympy as sp
 
 from symmech.scene import Scene
 from symmech.simulate.arguments import CONTACT_MODES, check_run, states
@@ -46,6 +47,10 @@ IMPLICIT_METHODS = ("rodas4", "radau", "bdf", "lsoda")
 _SYSTEMS: dict[tuple, tuple[weakref.ref, HybridSystem]] = {}
 
 
+def _key(x: object) -> str:
+    return sp.srepr(x) if isinstance(x, sp.Basic) else repr(x)
+
+
 def system_for(
     scene: Scene,
     target: str,
@@ -55,7 +60,8 @@ def system_for(
 ) -> HybridSystem:
     """The :class:`HybridSystem` of ``scene`` for ``target``, built once and cached while
     the scene lives."""
-    defs = tuple(sorted((str(k), str(v)) for k, v in (definitions or {}).items()))
+    # srepr, not str: symbols that print alike but differ in assumptions are different
+    defs = tuple(sorted((_key(k), _key(v)) for k, v in (definitions or {}).items()))
     key = (id(scene), target, strategy, defs, jacobian)
     hit = _SYSTEMS.get(key)
     if hit is not None and hit[0]() is scene:
