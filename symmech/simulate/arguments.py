@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from symmech.simulate.hybrid import Options
 from symmech.simulate.system import SimulationError, real_scalar, real_values
 
 __all__ = [
@@ -49,6 +50,18 @@ class RunOptions:
     event_samples: int
     contact: str
     max_steps: int = 10_000_000
+
+    def loop(self) -> Options:
+        """The options of the hybrid loop (:class:`symmech.simulate.hybrid.Options`)."""
+        return Options(
+            t_end=self.t_end,
+            rtol=self.rtol,
+            atol=self.atol,
+            max_events=self.max_events,
+            contact=self.contact,
+            samples=self.event_samples,
+            max_steps=self.max_steps,
+        )
 
 
 def positive(value: object, what: str) -> float:

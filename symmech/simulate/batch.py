@@ -37,7 +37,6 @@ from symmech.simulate.csim import (
     library,
     options_vector,
 )
-from symmech.simulate.hybrid import Options
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, check_parameters
@@ -132,15 +131,7 @@ def simulate_batch(
     values = check_parameters(scene, params)
     system = system_for(scene, "c", strategy, definitions)
     fns = Functions(system, values)
-    opts = Options(
-        t_end=tend,
-        rtol=rtol_f,
-        atol=atol_f,
-        max_events=max_events,
-        contact=contact,
-        samples=event_samples,
-        max_steps=o.max_steps,
-    )
+    opts = o.loop()
     index, vec = options_vector(opts, method, o.max_step, t0f)
     _check_rows(fns, values, Q, V, t0f, rtol_f, atol_f)
     lib = library(system)

@@ -27,7 +27,7 @@ import sympy as sp
 from symmech.scene import Scene
 from symmech.simulate.arguments import CONTACT_MODES, check_run, states
 from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
-from symmech.simulate.hybrid import Options, run
+from symmech.simulate.hybrid import run
 from symmech.simulate.result import SimulationResult
 from symmech.simulate.system import (
     BACKENDS,
@@ -156,15 +156,7 @@ def simulate(
             )
         y0[n:] = fns.project(None, t0f, q, v)
 
-    opts = Options(
-        t_end=tend,
-        rtol=rtol_f,
-        atol=atol_f,
-        max_events=max_events,
-        contact=contact,
-        samples=event_samples,
-        max_steps=o.max_steps,
-    )
+    opts = o.loop()
     if backend == "c":
         from symmech.simulate.c_run import run_c
 

@@ -78,15 +78,7 @@ def _loop(
         contact=contact,
         max_steps=max_steps,
     )
-    opts = Options(
-        t_end=o.t_end,
-        rtol=o.rtol,
-        atol=o.atol,
-        max_events=o.max_events,
-        contact=o.contact,
-        samples=o.event_samples,
-        max_steps=o.max_steps,
-    )
+    opts = o.loop()
     index, vec = options_vector(opts, method, o.max_step, o.t0)
     return opts, LoopOptions(t0=o.t0, method=index, vector=vec, width=width)
 
