@@ -106,3 +106,27 @@ def test_impact_map_apply_refuses_text(payload):
         im.apply([payload, 0])
     with pytest.raises(sm.ImpactError, match="apply: the velocity component"):
         im.apply({v[0]: payload, v[1]: 0})
+
+
+def test_wall_velocity_text_is_parsed_safely_and_array_forms_agree(payload):
+    import numpy as np
+
+    x, y = sp.symbols("x y", real=True)
+    scene = sm.Scene([x, y], metric=sp.eye(2), walls=[sm.Wall(x)])
+    with pytest.raises(sm.ImpactError, match=r"wall 'wall0': wall_velocity\[0\].*not allowed"):
+        scene.impact_map(0, wall_velocity=[payload, 0])
+    with pytest.raises(sm.ImpactError, match="wall_velocity must be a sequence"):
+        scene.impact_map(0, wall_velocity="0, y")
+    forms = [
+        [0, "y"],
+        [0, y],
+        sp.Matrix([0, y]),
+        [[0], [y]],
+        [[0, y]],
+        np.array([0, y], dtype=object),
+        np.array([[0], [y]], dtype=object),
+    ]
+    maps = [scene.impact_map(0, wall_velocity=V) for V in forms]
+    for m in maps[1:]:
+        assert m.matrix == maps[0].matrix and m.offset == maps[0].offset
+    assert list(maps[0].wall_velocity) == [0, y]

@@ -33,9 +33,10 @@ from symmech.algebra.sampling import sample_points
 from symmech.algebra.simplification import Level
 from symmech.algebra.stability import stable_coefficient, stable_matrix
 from symmech.algebra.zero import is_zero
+from symmech.declaration.expressions import to_expression
 from symmech.declaration.latex import latex_text
 from symmech.declaration.symbols import t as TIME
-from symmech.errors import ImpactError
+from symmech.errors import ImpactError, SymmechError
 from symmech.impacts.carnot import CarnotResult, carnot_residual
 from symmech.impacts.degeneracy import (
     Singularity,
@@ -310,6 +311,33 @@ def _with_undefined(points: Sequence[dict], psi: sp.Expr) -> list[dict]:
     return [{**p, **x} for p, x in zip(points, extra, strict=True)]
 
 
+def _wall_velocity(declaration: Declaration, value: object, wall: str) -> sp.Matrix:
+    """The given wall velocity as a matrix: a sympy matrix as it is; a sequence entry by
+    entry, text parsed safely (:func:`symmech.declaration.expressions.to_expression`) in
+    the coordinates, velocities, parameters and t, never evaluated."""
+    if isinstance(value, sp.MatrixBase):
+        return sp.Matrix(value)
+    items = value.tolist() if hasattr(value, "tolist") else value  # a NumPy array
+    if isinstance(items, str | bytes) or not isinstance(items, Sequence):
+        raise ImpactError(
+            f"wall {wall!r}: wall_velocity must be a sequence or a sympy matrix, got {value!r}"
+        )
+    rows = [r for r in items if isinstance(r, Sequence) and not isinstance(r, str)]
+    if len(items) == 1 and len(rows) == 1:  # one row [[a, b, ...]]
+        items = list(rows[0])
+    elif rows and len(rows) == len(items) and all(len(r) == 1 for r in rows):  # a column
+        items = [r[0] for r in rows]
+    d = declaration
+    names = {str(s): s for s in (*d.coordinates, *d.velocities, *d.parameters, TIME)}
+    try:
+        entries = [
+            to_expression(c, names, field=f"wall_velocity[{j}]") for j, c in enumerate(items)
+        ]
+    except SymmechError as exc:
+        raise ImpactError(f"wall {wall!r}: {exc}") from None
+    return sp.Matrix(len(entries), 1, entries)
+
+
 def derive_impact_map(
     declaration: Declaration,
     wall: ResolvedWall | int | str,
@@ -399,7 +427,7 @@ def derive_impact_map(
     if wall_velocity is None and rw.velocity is not None:
         wall_velocity = rw.velocity  # declared with the wall (checked by the declaration)
     if wall_velocity is not None:
-        V = sp.Matrix(wall_velocity)
+        V = _wall_velocity(declaration, wall_velocity, rw.name)
         if V.shape == (1, n):
             V = V.T
         if V.shape != (n, 1):
