@@ -40,6 +40,13 @@ is the largest); the impulse's relative error grows like it, and past :data:`CON
 the run stops with status ``"failed"`` and says why (a wall nearly dependent on the
 constraints).
 
+**Bounds.**  ``max_events`` events or ``max_steps`` accepted steps end the run with
+status ``"max_events"`` or ``"max_steps"`` (a tiny ``max_step``, or a step size collapsing
+on a stiff scene, would otherwise run without end: in C, without a way to interrupt it).
+The last step to ``t_end`` is taken however short, so a run may end a few ulps after an
+event; a step the controller shrinks below the resolution of t ends the run as
+``"failed"``.
+
 **Drift.**  After each accepted step of a constrained flow the velocity is projected with
 the mode's P(q) (Carnot paper section 2.2) and, in contact, the position is moved back onto
 psi = 0 along the gradient (one Newton step); the largest residual before projection is
