@@ -443,3 +443,15 @@ def test_error_hat_and_frames_and_rank_arguments():
         is_involutive([], XYZ)
     with pytest.raises(SceneError, match=r"is_involutive: fields\[1\] has 2 components"):
         is_involutive([[1, 0, 0], [0, 1]], XYZ)
+
+
+@pytest.mark.parametrize(
+    "bad", [float("nan"), float("inf"), 1j, sp.zoo, sp.oo * sp.Symbol("x"), sp.I]
+)
+def test_components_that_are_not_finite_and_real_are_refused(bad):
+    with pytest.raises(
+        SceneError, match=r"lie_bracket: component X\[0\] = .* is not finite and real"
+    ):
+        lie_bracket([bad, 0], [0, x], [x, y])
+    with pytest.raises(SceneError, match=r"hat: component w\[1\] = .* is not finite and real"):
+        hat([x, bad, 0])

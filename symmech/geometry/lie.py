@@ -85,12 +85,16 @@ def _coords(q: Any, where: str) -> _Coords:
 
 def _component(c: Any, name: str, where: str) -> sp.Expr:
     if isinstance(c, sp.Expr):
-        return c
-    if isinstance(c, numbers.Number) and not isinstance(c, bool):
-        return sp.sympify(c, strict=True)
-    raise SceneError(
-        f"{where}: component {name} = {c!r} ({type(c).__name__}) is not a sympy expression"
-    )
+        e = c
+    elif isinstance(c, numbers.Number) and not isinstance(c, bool):
+        e = sp.sympify(c, strict=True)
+    else:
+        raise SceneError(
+            f"{where}: component {name} = {c!r} ({type(c).__name__}) is not a sympy expression"
+        )
+    if e.has(sp.nan, sp.zoo, sp.oo, -sp.oo) or (e.is_number and e.is_extended_real is False):
+        raise SceneError(f"{where}: component {name} = {c!r} is not finite and real")
+    return e
 
 
 def _field(X: Any, cs: _Coords, name: str, where: str) -> sp.ImmutableMatrix:
