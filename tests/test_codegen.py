@@ -500,3 +500,13 @@ def test_templates_come_from_the_tree_the_code_was_imported_from():
 
     package = Path(backends.__file__).resolve().parents[1]
     assert backends.template_root() in (package / "templates", package.parent / "templates")
+
+
+def test_functions_as_one_name_empty_or_unknown():
+    scene = bouncing_ellipse()
+    one = sm.codegen.generate(scene, "numpy", functions="rhs")
+    assert one.files == sm.codegen.generate(scene, "numpy", functions=["rhs"]).files
+    with pytest.raises(sm.codegen.CodegenError, match=r"functions: empty; choose from \["):
+        sm.codegen.generate(scene, "numpy", functions=[])
+    with pytest.raises(sm.codegen.CodegenError, match=r"functions: unknown \['zzz', 1\]"):
+        sm.codegen.generate(scene, "numpy", functions=["rhs", "zzz", 1])

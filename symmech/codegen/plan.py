@@ -338,8 +338,12 @@ def build_plan(
     """
     if strategy not in STRATEGIES:
         raise CodegenError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
+    if isinstance(functions, str):  # one name, not its letters
+        functions = [functions]
     wanted = set(FUNCTIONS) if functions is None else set(functions)
-    unknown = sorted(wanted - set(FUNCTIONS))
+    if not wanted:
+        raise CodegenError(f"functions: empty; choose from {list(FUNCTIONS)} (None: all)")
+    unknown = sorted(wanted - set(FUNCTIONS), key=repr)
     if unknown:
         raise CodegenError(f"functions: unknown {unknown}; choose from {list(FUNCTIONS)}")
     if projectors:
