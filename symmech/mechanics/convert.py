@@ -215,11 +215,11 @@ def _in_basis(vec: Any, model: _Model) -> Any:
 
 def _partials(vec: Any, model: _Model, what: str) -> list[Any]:
     """The partial velocities d vec / d w^r, after checking vec is linear with no offset
-    (computed once per vector: the metric, the loads and the inertia forces share them)."""
-    key = (what, vec)
-    hit = model.partials.get(key)
+    (computed once per vector, whatever the caller: the metric, the loads and the inertia
+    forces share them; ``what`` names it in the error of the first)."""
+    hit = model.partials.get(vec)
     if hit is None:
-        hit = model.partials[key] = _partials_of(vec, model, what)
+        hit = model.partials[vec] = _partials_of(vec, model, what)
     return hit
 
 
