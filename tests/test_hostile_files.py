@@ -215,3 +215,57 @@ def test_cli_escapes_terminal_sequences_of_names_on_stderr(tmp_path, case):
         line = proc.stderr
     _assert_escaped(proc.stderr)
     assert "\\x1b[31m" in line, line
+
+
+def _library_path(folder, code):
+    from symmech.codegen.build import DEFAULT_FLAGS, find_compiler, library_key
+
+    return folder / f"symmech_{library_key(find_compiler(), DEFAULT_FLAGS, code.files)}.so"
+
+
+def test_a_planted_library_in_the_cache_is_rebuilt_not_loaded(tmp_path):
+    """A file at the cached library's name that another user could have written (here:
+    writable by group and others) is code: it is rebuilt and replaced, not loaded."""
+    from symmech.examples import bouncing_ball
+
+    code = sm.codegen.generate(bouncing_ball(), "c")
+    cache = tmp_path / "cache"
+    cache.mkdir(mode=0o700)
+    planted = _library_path(cache, code)
+    planted.write_bytes(b"not a library")
+    planted.chmod(0o666)
+    mod = code.load(cache=cache)
+    assert mod.call("energy", [1.0], [0.0], params={"m": 1.0, "g": 2.0, "alpha": 0.5}) == 2.0
+    assert planted.read_bytes()[:4] == b"\x7fELF"
+    assert planted.stat().st_mode & 0o022 == 0
+
+
+def test_a_cache_folder_any_user_may_write_is_refused_unless_sticky(tmp_path):
+    from symmech.codegen.build import CompileError, cache_dir
+
+    open_folder = tmp_path / "open"
+    open_folder.mkdir()
+    open_folder.chmod(0o777)
+    with pytest.raises(CompileError, match="writable by other users and not sticky"):
+        cache_dir(open_folder)
+    sticky = tmp_path / "sticky"
+    sticky.mkdir()
+    sticky.chmod(0o1777)
+    assert cache_dir(sticky) == sticky
+    fresh = tmp_path / "new" / "cache"
+    assert cache_dir(fresh) == fresh and fresh.stat().st_mode & 0o077 == 0
+
+
+def test_only_a_private_regular_file_is_trusted(tmp_path):
+    from symmech.codegen.build import trusted_file
+
+    own = tmp_path / "own.so"
+    own.write_bytes(b"x")
+    own.chmod(0o644)
+    assert trusted_file(own)
+    own.chmod(0o664)
+    assert not trusted_file(own)
+    link = tmp_path / "link.so"
+    link.symlink_to(own)
+    own.chmod(0o644)
+    assert not trusted_file(link) and not trusted_file(tmp_path / "missing.so")

@@ -5,6 +5,11 @@ flags, so a library is rebuilt exactly when one of them changes.  The cache fold
 ``$SYMMECH_CACHE_DIR``, else ``$XDG_CACHE_HOME/symmech``, else ``~/.cache/symmech``.
 Libraries are built in a private temporary folder and moved into place atomically, so
 concurrent builds of the same code do not collide.
+
+A cached library is code this process runs, so the cache is trusted only as far as its
+owner: a folder writable by other users must be sticky (``/tmp``), and a cached file is
+reused only when it is a regular file owned by this user and writable by no one else
+(:func:`trusted_file`); otherwise it is rebuilt.
 """
 
 from __future__ import annotations
@@ -13,6 +18,7 @@ import ctypes
 import hashlib
 import os
 import shutil
+import stat
 import subprocess
 import tempfile
 from collections.abc import Mapping, Sequence
@@ -28,6 +34,7 @@ __all__ = [
     "compile_library",
     "extension_includes",
     "find_compiler",
+    "trusted_file",
 ]
 
 #: Flags for the loadable library: C99, optimised, position independent.  No
@@ -72,8 +79,33 @@ def cache_dir(path: str | Path | None = None) -> Path:
             base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
             path = Path(base) / "symmech"
     folder = Path(path)
-    folder.mkdir(parents=True, exist_ok=True)
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    if hasattr(os, "getuid"):
+        st = folder.stat()
+        shared = st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+        if shared and not st.st_mode & stat.S_ISVTX:
+            raise CompileError(
+                f"cache folder {folder}: writable by other users and not sticky, so another"
+                " user could replace a cached library (which is code this process runs); use"
+                " a private folder (SYMMECH_CACHE_DIR, or cache=...)"
+            )
     return folder
+
+
+def trusted_file(path: Path) -> bool:
+    """Whether a cached file may be reused: a regular file (not a link) and, on POSIX,
+    owned by this user and writable by no one else.  Anything else may have been planted
+    by another user of a shared folder; it is rebuilt (and replaced where the folder lets
+    this user replace it)."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return False
+    if not stat.S_ISREG(st.st_mode):
+        return False
+    if hasattr(os, "getuid"):
+        return st.st_uid == os.getuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
+    return True
 
 
 def extension_includes() -> tuple[list[str], str | None]:
@@ -116,7 +148,7 @@ def compile_library(
     key = library_key(cc, flags, sources)
     folder = cache_dir(cache)
     library = folder / (filename or "symmech_{key}.so").format(key=key)
-    if library.is_file():
+    if trusted_file(library):
         return library
     with tempfile.TemporaryDirectory(prefix="build_", dir=folder) as tmp:
         work = Path(tmp)
@@ -138,7 +170,13 @@ def compile_library(
                 f"{' '.join(cmd)} failed with exit code {result.returncode}:\n"
                 + (result.stderr or result.stdout).strip()
             )
-        os.replace(target, library)
+        try:
+            os.replace(target, library)
+        except OSError as exc:
+            raise CompileError(
+                f"cannot put the library in place at {library}: {exc.strerror} (a file of"
+                " that name that this user may not replace: use a private cache folder)"
+            ) from None
     return library
 
 

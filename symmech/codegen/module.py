@@ -53,7 +53,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import sympy as sp
 
-from symmech.codegen.build import DEFAULT_FLAGS, cache_dir, compile_library, load_library
+from symmech.codegen.build import (
+    DEFAULT_FLAGS,
+    cache_dir,
+    compile_library,
+    load_library,
+    trusted_file,
+)
 from symmech.codegen.callers import Fast, NumericalError, Raw, c_raw, numpy_fast, numpy_raw
 from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import CodegenError
@@ -455,9 +461,10 @@ def _import_numpy_module(code: GeneratedCode, folder: Path):
     text = code.files[f"{code.stem}.py"]
     key = hashlib.sha256(text.encode()).hexdigest()[:16]
     path = folder / f"{code.stem}_{key}.py"
-    # the cache folder may be shared: a file there is used only if it is a regular file
-    # (not a link) holding exactly this text, else it is replaced
-    fresh = path.is_file() and not path.is_symlink()
+    # the cache folder may be shared: a file there is used only if it is trusted (a
+    # regular file of this user that no one else may write) holding exactly this text,
+    # else it is replaced
+    fresh = trusted_file(path)
     if not fresh or path.read_text(encoding="utf-8") != text:
         write_text_atomic(path, text)
     name = f"_symmech_generated_{code.stem}_{key}"
