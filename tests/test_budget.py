@@ -216,6 +216,20 @@ def test_field_declines_an_input_whose_expansion_is_over_budget():
     assert small.K is not None and small.declined is None
 
 
+def test_field_declines_inputs_with_too_many_generators_and_the_solve_stays_exact():
+    """A potential of 20 trigonometric terms needs 4 * 20 generators (sin and cos of
+    k x and k y): over FIELD_GENERATORS the field declines, and the acceleration (an
+    identity metric: a = -grad V) comes from the plain route, still exact."""
+    V = sp.Add(*[sp.cos(k * x) * sp.sin(k * y) for k in range(1, 21)])
+    field = RationalField([sp.diff(V, x), sp.diff(V, y)])
+    assert field.K is None and "80 generators" in field.declined
+    assert "FIELD_GENERATORS = 64" in field.declined
+    scene = sm.Scene([x, y], metric=sp.eye(2), potential=V, name="many_generators")
+    acc = scene.acceleration()
+    assert sp.expand(acc[0] + sp.diff(V, x)) == 0 and sp.expand(acc[1] + sp.diff(V, y)) == 0
+    assert RationalField([sp.cos(x) * sp.sin(y)]).declined is None
+
+
 def test_stable_coefficient_structural_shortcut_agrees_with_the_full_step():
     scene = pendulum_on_cart(5)
     state = (*scene.coordinates, sm.t)

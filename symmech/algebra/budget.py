@@ -51,6 +51,7 @@ __all__ = [
     "FIELD_BLOCK_MAX_N",
     "FIELD_DEGREE",
     "FIELD_GCD_TERMS",
+    "FIELD_GENERATORS",
     "FIELD_MINOR_TERMS",
     "FIELD_TERMS",
     "FULL_SIMPLIFY_OPS",
@@ -83,6 +84,10 @@ __all__ = [
 FIELD_TERMS = 20_000
 #: degree, skip: ... or whose expansion has a larger total degree.
 FIELD_DEGREE = 128
+#: generators, skip: ... or that need more generators (symbols, and sin, cos, other
+#: functions and radicals as dummies) in all: every term of the domain carries one
+#: exponent per generator (a potential of 400 trigonometric terms needs 1600).
+FIELD_GENERATORS = 64
 #: size, skip: largest diagonal block solved fraction-free by Laplace expansion.
 FIELD_BLOCK_MAX_N = 8
 #: terms, skip: the minors and cofactors of one block may hold this many terms.

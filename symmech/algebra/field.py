@@ -62,6 +62,7 @@ from symmech.algebra import budget as limits
 from symmech.algebra.block_structure import diagonal_blocks
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.laplace import adjugate_det
+from symmech.algebra.walk import free_symbols
 
 __all__ = [
     "RationalField",
@@ -389,7 +390,14 @@ def _over_budget(exprs: Sequence[sp.Expr]) -> str | None:
     """The reason the inputs are not expanded into a polynomial domain, or None: one of
     them expands (bound of :func:`symmech.algebra.budget.expanded_terms`) to more than
     :data:`symmech.algebra.budget.FIELD_TERMS` terms or to a degree above
-    :data:`symmech.algebra.budget.FIELD_DEGREE` (construct_domain would expand it in full)."""
+    :data:`symmech.algebra.budget.FIELD_DEGREE` (construct_domain would expand it in full),
+    or they need more than :data:`symmech.algebra.budget.FIELD_GENERATORS` generators."""
+    generators = set().union(*(free_symbols(e) for e in exprs))
+    if len(generators) > limits.FIELD_GENERATORS:
+        return (
+            f"the entries need {len(generators)} generators"
+            f" (FIELD_GENERATORS = {limits.FIELD_GENERATORS})"
+        )
     for e in exprs:
         terms, degree = limits.expanded_terms(e)
         if terms > limits.FIELD_TERMS:
