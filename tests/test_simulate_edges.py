@@ -243,3 +243,37 @@ def test_definitions_that_print_alike_are_not_confused_by_the_system_cache():
             backend="numpy",
             definitions={"f": 2 + sp.Symbol("r") * sp.sin(sm.t)},
         )
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_force_defined_for_the_run_lifts_a_resting_body_off_the_floor(backend):
+    """x'' = -g + tau(t) on the floor x >= 0 with tau = 2 g t given by definitions=: the
+    body rests (locked contact, normal force g - 2 g t) until t = 1/2, then flies with
+    v = g (t - 1/2)^2, x = g (t - 1/2)^3 / 3 (closed form).  The locked contact's force
+    used to be printed without the definition (C: an unprintable tau(t))."""
+    x = sm.coordinates("x")
+    g = sp.Symbol("g", positive=True)
+    scene = sm.Scene(
+        x,
+        metric=sp.eye(1),
+        potential=g * x[0],
+        forces=[sp.Function("tau")(sm.t)],
+        walls=[sm.Wall(x[0], restitution=0)],
+        name="lifted",
+    )
+    res = sm.simulate(
+        scene,
+        [0.0],
+        [0.0],
+        1.0,
+        params={"g": 9.81},
+        definitions={"tau": "2*g*t"},
+        backend=backend,
+        rtol=1e-10,
+        atol=1e-12,
+    )
+    assert res.status == "finished", res.message
+    assert [e.kind for e in res.events] == ["contact", "release"]
+    assert res.events[1].time == pytest.approx(0.5, abs=1e-9)
+    assert res.q[-1, 0] == pytest.approx(9.81 / 24, abs=1e-12)
+    assert res.v[-1, 0] == pytest.approx(9.81 / 4, abs=1e-12)

@@ -236,7 +236,7 @@ class _Inputs:
         return tuple((d, a) for a, d in items)
 
 
-def _definitions(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Expr]:
+def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Expr]:
     """``definitions`` as ``{f(t): expression}``.  A key is ``f``, ``f(t)`` or the name
     ``"f"`` of a function of t in the scene (matched by name); a value is a sympy
     expression, a number, or text parsed safely
@@ -387,7 +387,7 @@ def _build(
     # with k = 2.0 is x**2 and the folding of constants rounds once, at printing
     exact = {s: sp.Rational(val) if isinstance(val, sp.Float) else val for s, val in baked.items()}
     runtime = tuple(p for p in scene.parameters if p not in baked)
-    inputs = _Inputs(_definitions(scene, definitions))
+    inputs = _Inputs(definition_rules(scene, definitions))
     q, v = scene.coordinates, scene.velocities
     omitted: list[str] = [fallback] if fallback else []
     plans: list[FunctionPlan] = []

@@ -38,7 +38,7 @@ from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
 from symmech.simulate.hybrid import COND_LIMIT, Options
 from symmech.simulate.steppers import ExplicitRK, c_tableau, stepper
-from symmech.simulate.system import Functions, HybridSystem, SimulationError, contact_rows
+from symmech.simulate.system import Functions, HybridSystem, SimulationError
 
 __all__ = [
     "C_METHODS",
@@ -120,13 +120,11 @@ def _call(module: Any, name: str, args: dict[str, str], offset: int) -> str:
 
 
 def _locked_force_lines(system: HybridSystem, wall: int, offset: int) -> list[str]:
-    """``lambda_N`` of a locked contact (entry ``m`` of ``lambda`` with ``A^T lambda =
-    -f(q, 0)``, A the contact rows; :meth:`HybridSystem.locked_force`) printed in C."""
+    """``lambda_N`` of a locked contact
+    (:meth:`~symmech.simulate.system.HybridSystem.locked_force_expression`) printed in C."""
     scene = system.scene
     decl = scene.declaration
-    A = sp.Matrix(contact_rows(scene, wall))
-    f0 = sp.Matrix(scene.forcing()).xreplace({v: 0 for v in decl.velocities})
-    expr = A.T.LUsolve(-f0)[decl.m]
+    expr = system.locked_force_expression(wall)
     temps, (body,) = sp.cse([expr], symbols=sp.numbered_symbols("lf"))
     names: dict[sp.Symbol, str] = {TIME: "t"}
     names.update({s: f"q[{i}]" for i, s in enumerate(decl.coordinates)})

@@ -43,6 +43,7 @@ import sympy as sp
 
 from symmech.codegen import CodegenError, generate
 from symmech.codegen.module import NumericalError, SceneModule
+from symmech.codegen.plan import definition_rules
 from symmech.codegen.runtime_checks import real_array
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
@@ -309,17 +310,25 @@ class HybridSystem:
             self.modules[wall] = None if cs is None else self._load(cs)  # type: ignore[assignment]
         return self.modules[wall]
 
+    def locked_force_expression(self, wall: int) -> sp.Expr:
+        """``lambda_N(t, q)`` of a contact that locks the body: entry ``m`` of the statics
+        ``A^T lambda = -f(q, 0)`` (Carnot paper eq. 5 at rest; A the contact rows), with
+        the run's definitions of the functions of time substituted."""
+        decl = self.scene.declaration
+        A = sp.Matrix(contact_rows(self.scene, wall))
+        f0 = sp.Matrix(self.scene.forcing()).xreplace({v: 0 for v in decl.velocities})
+        rules = definition_rules(self.scene, self.definitions)
+        if rules:
+            f0 = f0.subs(rules).doit()
+        return A.T.LUsolve(-f0)[decl.m]
+
     def locked_force(self, wall: int) -> Any:
-        """For a contact that locks the body: ``lambda_N(t, q, params)`` from the statics
-        ``A^T lambda = -f(q, 0)`` (Carnot paper eq. 5 at rest; A the contact rows), as a
-        NumPy function of (t, q, p) (p in the order of the scene's parameters)."""
+        """:meth:`locked_force_expression` as a NumPy function of (t, q, p) (p in the
+        order of the scene's parameters)."""
         key = ("locked", wall)
         if key not in self._locked:
             decl = self.scene.declaration
-            A = sp.Matrix(contact_rows(self.scene, wall))
-            f0 = sp.Matrix(self.scene.forcing()).xreplace({v: 0 for v in decl.velocities})
-            lam = A.T.LUsolve(-f0)
-            expr = lam[decl.m]
+            expr = self.locked_force_expression(wall)
             args = [TIME, sp.Matrix(decl.coordinates), sp.Matrix(decl.parameters)]
             self._locked[key] = sp.lambdify(args, expr, modules="numpy", cse=True)
         return self._locked[key]
