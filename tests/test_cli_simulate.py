@@ -146,3 +146,52 @@ def test_simulate_max_steps_bounds_the_run(tmp_path: Path):
     proc = symmech("simulate", "bouncing_ball", "--max-steps", "3", "--quiet", cwd=tmp_path)
     assert proc.returncode == 1, proc.stderr  # the run did not reach t_end
     assert re.search(r"status: max_steps: stopped after 3 steps at t = 0\.\d+", proc.stdout)
+
+
+FORCED = """format = 1
+name = "forced_spring"
+coordinates = ["x"]
+metric = ["m"]
+potential = "k*x**2/2"
+forces = ["-c*xdot + tau"]
+
+[parameters]
+m = 1
+k = 4
+c = 0.1
+
+[inputs]
+tau = { description = "motor" }
+
+[[walls]]
+name = "stop"
+psi = "x + 1"
+restitution = 0.5
+"""
+
+
+def test_simulate_defines_a_run_time_input(tmp_path: Path):
+    """--define tau=sin(3*t): x'' = -4 x - 0.1 x' + sin(3 t) from (0.5, 0), the wall never
+    reached; the final state against scipy's solve_ivp at 1e-12."""
+    from scipy.integrate import solve_ivp
+
+    (tmp_path / "forced.toml").write_text(FORCED, encoding="utf-8")
+    args = ["simulate", "forced.toml", "--q0", "0.5", "--v0", "0", "--t-end", "2"]
+    proc = symmech(*args, "--define", "tau=sin(3*t)", "--rtol", "1e-11", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "status: finished" in proc.stdout and "events: 0" in proc.stdout
+    q = float(re.search(r"^q = \[(\S+)\]", proc.stdout, re.M).group(1))
+    v = float(re.search(r"^v = \[(\S+)\]", proc.stdout, re.M).group(1))
+    ref = solve_ivp(
+        lambda t, y: [y[1], -4 * y[0] - 0.1 * y[1] + math.sin(3 * t)],
+        (0, 2),
+        [0.5, 0.0],
+        rtol=1e-12,
+        atol=1e-14,
+        method="DOP853",
+    )
+    assert abs(q - ref.y[0, -1]) < 1e-9 and abs(v - ref.y[1, -1]) < 1e-9
+    missing = symmech(*args, "--quiet", cwd=tmp_path)
+    assert missing.returncode != 0 and "--define f=EXPR" in missing.stderr
+    hostile = symmech(*args, "--define", "tau=__import__('os')", "--quiet", cwd=tmp_path)
+    assert hostile.returncode != 0 and "is not allowed" in hostile.stderr

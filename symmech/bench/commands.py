@@ -1,10 +1,13 @@
 """The ``symmech simulate``, ``symmech bench`` and ``symmech stress`` commands.
 
-``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...]``
+``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...]
+[--define NAME=EXPR ...]``
     Run the scene (a built-in name or a scene file) with :func:`symmech.simulate` and print
     its status, statistics, events and final state.  A built-in scene with a simulation
     case (:mod:`symmech.bench.cases`) needs no state; otherwise ``--q0``, ``--v0`` and
-    ``--t-end`` are required.  Parameters default to the scene file's values.
+    ``--t-end`` are required.  Parameters default to the scene file's values.  ``--define``
+    gives a function of time of the scene (a run-time input, a moving wall's position) an
+    expression in t and the parameters for the run (parsed safely: ``definitions=``).
 ``symmech bench SCENE [--tolerances ...] [--routes ...] [--plot FILE]``
     The work-precision table of a built-in case (:mod:`symmech.bench.work_precision`).
 ``symmech stress [-k CASE] [--backend B]``
@@ -46,6 +49,13 @@ def add_commands(sub: Any, common: argparse.ArgumentParser) -> None:
     sim.add_argument("--t-end", type=float, help="final time")
     sim.add_argument(
         "--param", action="append", default=[], metavar="NAME=VALUE", help="a parameter value"
+    )
+    sim.add_argument(
+        "--define",
+        action="append",
+        default=[],
+        metavar="NAME=EXPR",
+        help="an expression in t and the parameters for a function of time (an input)",
     )
     sim.add_argument("--backend", default="c", choices=("c", "numpy", "scipy"))
     sim.add_argument("--method", default="dop853")
@@ -94,6 +104,12 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         if not sep:
             raise SymmechError(f"--param: expected NAME=VALUE, got {item!r}")
         params[name.strip()] = numbers(value, f"--param {name}")[0]
+    definitions: dict[str, str] = {}
+    for item in args.define:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip():
+            raise SymmechError(f"--define: expected NAME=EXPR, got {item!r}")
+        definitions[name.strip()] = text
     say(f"simulating {scene.name} to t = {t_end} ({args.backend}, {args.method})")
     res = simulate_pkg.simulate(
         scene,
@@ -108,6 +124,7 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         contact=args.contact,
         max_events=args.max_events,
         max_steps=args.max_steps,
+        definitions=definitions or None,
     )
     _print(f"status: {res.status}: {res.message}")
     if res.accumulation_time is not None:

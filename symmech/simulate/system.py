@@ -379,7 +379,8 @@ class Functions:
         if free.inputs:
             raise SimulationError(
                 f"scene {system.scene.name!r} has arbitrary functions of time {list(free.inputs)}:"
-                " give their expressions with definitions={f: expression}"
+                " give their expressions with definitions={f: expression} (command line:"
+                " --define f=EXPR)"
             )
         #: The mode the flow integrates (None: free flight; a wall's index: in contact).
         self.mode: int | None = None
