@@ -193,6 +193,15 @@ class Scene:
             cache[key] = build()
         return cache[key]
 
+    def attached(self, key: tuple, build: Callable[[], Any]) -> Any:
+        """An object a later layer derives from this scene (the simulator's compiled
+        systems), built by ``build()`` once per ``key`` and kept with the scene: it lives
+        exactly as long as the scene does (a module-level cache would keep both alive).
+        ``key`` is a tuple whose first entry names the layer (``("simulate", ...)``)."""
+        if not isinstance(key, tuple) or not key or not isinstance(key[0], str):
+            raise SceneError(f"attached: key must be a tuple naming its layer first, got {key!r}")
+        return self._cached(("attached", *key), build)
+
     # -- declaration -----------------------------------------------------------------------
     @property
     def declaration(self) -> Declaration:

@@ -277,3 +277,31 @@ def test_a_force_defined_for_the_run_lifts_a_resting_body_off_the_floor(backend)
     assert res.events[1].time == pytest.approx(0.5, abs=1e-9)
     assert res.q[-1, 0] == pytest.approx(9.81 / 24, abs=1e-12)
     assert res.v[-1, 0] == pytest.approx(9.81 / 4, abs=1e-12)
+
+
+def test_a_simulated_scene_is_freed_with_its_compiled_systems():
+    """The simulator's systems are kept with the scene, not in a module-level cache that
+    held every scene ever simulated (and its compiled code) for the life of the process."""
+    import gc
+    import weakref
+
+    x = sm.coordinates("x")
+    refs = []
+    for k in (1, 2):
+        scene = sm.Scene(
+            x, metric=sp.eye(1), potential=k * x[0] ** 2 / 2, walls=[sm.Wall(x[0] + 2)]
+        )
+        for backend in BACKENDS:
+            assert sm.simulate(scene, [1.0], [0.0], 0.1, backend=backend).status == "finished"
+        again = sm.simulate.system_for(scene, "c")
+        assert sm.simulate.system_for(scene, "c") is again  # built once per scene
+        refs.append(weakref.ref(scene))
+        del scene, again
+    gc.collect()
+    assert [r() for r in refs] == [None, None]
+
+
+def test_attached_keys_name_their_layer(ball):
+    assert ball.attached(("test", 1), lambda: [1]) is ball.attached(("test", 1), lambda: [2])
+    with pytest.raises(sm.SceneError, match="attached: key must be a tuple naming its layer"):
+        ball.attached("test", list)

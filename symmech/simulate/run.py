@@ -17,7 +17,6 @@ finite, with their declared signs, restitutions in [0, 1]) and the options.
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Mapping
 from typing import Any
 
@@ -44,9 +43,6 @@ __all__ = ["CONTACT_MODES", "simulate", "system_for"]
 IMPLICIT_METHODS = ("rodas4", "radau", "bdf", "lsoda")
 
 
-_SYSTEMS: dict[tuple, tuple[weakref.ref, HybridSystem]] = {}
-
-
 def _key(x: object) -> str:
     return sp.srepr(x) if isinstance(x, sp.Basic) else repr(x)
 
@@ -58,19 +54,16 @@ def system_for(
     definitions: Mapping | None = None,
     jacobian: bool = False,
 ) -> HybridSystem:
-    """The :class:`HybridSystem` of ``scene`` for ``target``, built once and cached while
-    the scene lives."""
+    """The :class:`HybridSystem` of ``scene`` for ``target``, built once and kept with the
+    scene (:meth:`symmech.Scene.attached`: it is freed with the scene)."""
     # srepr, not str: symbols that print alike but differ in assumptions are different
     defs = tuple(sorted((_key(k), _key(v)) for k, v in (definitions or {}).items()))
-    key = (id(scene), target, strategy, defs, jacobian)
-    hit = _SYSTEMS.get(key)
-    if hit is not None and hit[0]() is scene:
-        return hit[1]
-    system = HybridSystem.build(
-        scene, target, strategy=strategy, definitions=definitions, jacobian=jacobian
+    return scene.attached(
+        ("simulate", target, strategy, defs, jacobian),
+        lambda: HybridSystem.build(
+            scene, target, strategy=strategy, definitions=definitions, jacobian=jacobian
+        ),
     )
-    _SYSTEMS[key] = (weakref.ref(scene), system)
-    return system
 
 
 def simulate(
