@@ -18,9 +18,11 @@ velocity tolerance ``tol_v = atol + rtol |v|_inf``:
   cradle) the velocity passes down the row.
 * ``|r| <= tol_v``: the wall is reached tangentially.  If the wall would have to push to
   keep the body out (lambda_N > 0 in its contact mode), or the body still creeps in
-  (``r < 0``) and nothing pulls it away (lambda_N >= 0), it stays on the wall: **contact**
-  (so a slow approach never tunnels).  Otherwise it is a **grazing** touch: reported, no
-  impact map, and the free flow, which leads away from the wall, continues.
+  (``r < -100 eps |v|_inf``, faster than the rounding of r) and nothing pulls it away
+  (lambda_N >= 0), it stays on the wall: **contact** (so a slow approach never tunnels).
+  Otherwise it is a **grazing** touch: reported, no impact map, and the free flow, which
+  leads away from the wall (or creeps at the rounding level: the residue of an impact
+  map between two balls left at rest), continues.
 * **Accumulation (Zeno)**: after an impact whose rebound rate is below ``zeno_factor tol_v``
   (or so slow that its bounce would not rise above the position resolution, see
   :meth:`_Run.zeno_speed`) while the wall would have to push (lambda_N > 0), the impacts
@@ -151,6 +153,12 @@ class _Run:
 
     def tol_v(self, y: np.ndarray) -> float:
         return self.o.atol + self.o.rtol * max((abs(x) for x in self.v(y)), default=0)
+
+    def creep_floor(self, y: np.ndarray) -> float:
+        """The rounding level of a normal rate, ``100 eps |v|_inf``: an approach slower
+        than this (the residue of an impact map that should leave two equal balls at
+        rest) is no approach."""
+        return 100 * self.f.eps * max((abs(x) for x in self.v(y)), default=0)
 
     def record(self, t: float, y: np.ndarray) -> None:
         self.ts.append(t)
@@ -362,9 +370,10 @@ class _Run:
         self.banded.discard(wall)
         if rate >= -tol_v:
             # reached tangentially: a resting contact if the wall must (or may) hold the
-            # body while it still creeps in (lambda_N >= 0), else a grazing touch
+            # body while it still creeps in (lambda_N >= 0, faster than rounding), else a
+            # grazing touch
             force = self.normal_force(wall, y)
-            if force > 0 or (rate < 0 and force >= 0):
+            if force > 0 or (rate < -self.creep_floor(y) and force >= 0):
                 self.enter_contact(wall, rate, reason="grazing contact with the wall pressing")
             else:
                 self.event("grazing", wall, y, y, rate)

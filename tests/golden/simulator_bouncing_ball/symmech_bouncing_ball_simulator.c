@@ -609,6 +609,14 @@ static double tol_v(const sim_t *s, const double *y)
     return s->atol + s->rtol * m;
 }
 
+/* the rounding level of a normal rate, 100 eps |v|_inf (hybrid.py: creep_floor) */
+static double creep_floor(const double *y)
+{
+    double m = 0.0;
+    for (int i = NQ; i < NY; ++i) m = fabs(y[i]) > m ? fabs(y[i]) : m;
+    return 100 * EPS * m;
+}
+
 static int event(sim_t *s, int kind, int wall, const double *ym, const double *yp, double r)
 {
     double e0 = energy(s, s->t, ym, ym + NQ), e1 = energy(s, s->t, yp, yp + NQ);
@@ -1005,9 +1013,11 @@ static int at_wall(sim_t *s, int w)
     s->banded[w] = 0;
     if (r >= -tol_v(s, s->y)) {
         /* reached tangentially: a resting contact if the wall must (or may) hold the body
-           while it still creeps in (lambda_N >= 0), else a grazing touch */
+           while it still creeps in (lambda_N >= 0, faster than rounding), else a grazing
+           touch */
         double force = push_force(s, w, s->y);
-        if (force > 0 || (r < 0 && force >= 0)) return enter_contact(s, w, r, 0, s->t);
+        if (force > 0 || (r < -creep_floor(s->y) && force >= 0))
+            return enter_contact(s, w, r, 0, s->t);
         if (event(s, K_GRAZING, w, s->y, s->y, r)) return 1;
         s->grazing[w] = 1;
         return 0;
