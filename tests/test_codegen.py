@@ -493,11 +493,24 @@ def test_an_entry_that_is_not_finite_is_refused_with_its_place(value):
         codegen.generate(scene, "numpy", definitions={f: value})
 
 
-def test_templates_come_from_the_tree_the_code_was_imported_from():
-    """An editable install's templates must not fill the code of another checkout: the
-    template folder is the package's own or the checkout's next to it."""
+def test_templates_come_from_the_tree_the_code_was_imported_from(tmp_path, monkeypatch):
+    """An editable install's templates must not fill the code of another checkout: with
+    the resource ``symmech.templates`` resolving to another tree's folder (as an editable
+    install's finder does for a second checkout on PYTHONPATH), the template folder is
+    still the package's own or the checkout's next to it."""
+    import importlib.resources
+
     from symmech.codegen import backends
 
+    other = tmp_path / "other_tree" / "templates"
+    (other / "c").mkdir(parents=True)
+    (other / "c" / "source.c.jinja").write_text("/* another tree */\n", encoding="utf-8")
+    real_files = importlib.resources.files
+
+    def files(name):
+        return other if name == "symmech.templates" else real_files(name)
+
+    monkeypatch.setattr(importlib.resources, "files", files)
     package = Path(backends.__file__).resolve().parents[1]
     assert backends.template_root() in (package / "templates", package.parent / "templates")
 
