@@ -151,14 +151,18 @@ class _Run:
     def v(self, y: np.ndarray) -> np.ndarray:
         return y[self.n :]
 
+    def speed(self, y: np.ndarray) -> float:
+        """``|v|_inf``, the scale of the velocity tolerances below."""
+        return max((abs(x) for x in self.v(y)), default=0)
+
     def tol_v(self, y: np.ndarray) -> float:
-        return self.o.atol + self.o.rtol * max((abs(x) for x in self.v(y)), default=0)
+        return self.o.atol + self.o.rtol * self.speed(y)
 
     def creep_floor(self, y: np.ndarray) -> float:
         """The rounding level of a normal rate, ``100 eps |v|_inf``: an approach slower
         than this (the residue of an impact map that should leave two equal balls at
         rest) is no approach."""
-        return 100 * self.f.eps * max((abs(x) for x in self.v(y)), default=0)
+        return 100 * self.f.eps * self.speed(y)
 
     def record(self, t: float, y: np.ndarray) -> None:
         self.ts.append(t)

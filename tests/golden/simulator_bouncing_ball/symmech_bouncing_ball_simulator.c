@@ -602,19 +602,23 @@ static double normal_force(sim_t *s, int w, double t, const double *q, const dou
     return out;
 }
 
-static double tol_v(const sim_t *s, const double *y)
+/* |v|_inf, the scale of the velocity tolerances (hybrid.py: speed) */
+static double speed(const double *y)
 {
     double m = 0.0;
     for (int i = NQ; i < NY; ++i) m = fabs(y[i]) > m ? fabs(y[i]) : m;
-    return s->atol + s->rtol * m;
+    return m;
+}
+
+static double tol_v(const sim_t *s, const double *y)
+{
+    return s->atol + s->rtol * speed(y);
 }
 
 /* the rounding level of a normal rate, 100 eps |v|_inf (hybrid.py: creep_floor) */
 static double creep_floor(const double *y)
 {
-    double m = 0.0;
-    for (int i = NQ; i < NY; ++i) m = fabs(y[i]) > m ? fabs(y[i]) : m;
-    return 100 * EPS * m;
+    return 100 * EPS * speed(y);
 }
 
 static int event(sim_t *s, int kind, int wall, const double *ym, const double *yp, double r)
