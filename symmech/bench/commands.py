@@ -28,6 +28,7 @@ from symmech.bench.cases import CASES
 from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError
 from symmech.simulate.arguments import numbers
+from symmech.simulate.hybrid import MAX_STEPS
 
 __all__ = ["COMMANDS", "add_commands", "run_command"]
 
@@ -63,7 +64,7 @@ def add_commands(sub: Any, common: argparse.ArgumentParser) -> None:
     sim.add_argument("--atol", type=float, default=1e-10)
     sim.add_argument("--contact", default="persistent", choices=("persistent", "stop"))
     sim.add_argument("--max-events", type=int, default=100_000)
-    sim.add_argument("--max-steps", type=int, default=10_000_000, help="steps of the run")
+    sim.add_argument("--max-steps", type=int, default=MAX_STEPS, help="steps of the run")
     sim.add_argument("--events", type=int, default=20, help="events to print (default 20)")
 
     bench = sub.add_parser("bench", parents=[common], help="error against run time")

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from symmech.simulate.hybrid import Options
+from symmech.simulate.hybrid import MAX_STEPS, Options
 from symmech.simulate.system import SimulationError, real_scalar, real_values
 
 __all__ = [
@@ -49,7 +49,7 @@ class RunOptions:
     max_events: int
     event_samples: int
     contact: str
-    max_steps: int = 10_000_000
+    max_steps: int = MAX_STEPS
 
     def loop(self) -> Options:
         """The options of the hybrid loop (:class:`symmech.simulate.hybrid.Options`)."""
@@ -119,7 +119,7 @@ def check_run(
     max_events: Any,
     event_samples: Any,
     contact: Any,
-    max_steps: Any = 10_000_000,
+    max_steps: Any = MAX_STEPS,
 ) -> RunOptions:
     """The checked options (see the module docstring)."""
     if contact not in CONTACT_MODES:

@@ -37,6 +37,7 @@ from symmech.simulate.csim import (
     library,
     options_vector,
 )
+from symmech.simulate.hybrid import MAX_STEPS
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, check_parameters
@@ -95,7 +96,7 @@ def simulate_batch(
     atol: float = 1e-10,
     max_step: float | None = None,
     max_events: int = 100_000,
-    max_steps: int = 10_000_000,
+    max_steps: int = MAX_STEPS,
     contact: str = "persistent",
     threads: int | None = None,
     strategy: str = "auto",

@@ -70,7 +70,10 @@ from symmech.simulate.events import find_root
 from symmech.simulate.flow import FlowFailure, Segment
 from symmech.simulate.result import Event, SimulationResult
 
-__all__ = ["COND_LIMIT", "Options", "run"]
+__all__ = ["COND_LIMIT", "MAX_STEPS", "Options", "run"]
+
+#: Default bound on the accepted steps of one run (:attr:`Options.max_steps`).
+MAX_STEPS = 10_000_000
 
 #: Largest condition number of an impact's Gram matrix the loop accepts: the impulse's
 #: relative error is about cond * eps, so 1e-2 / eps keeps it below 1e-2.
@@ -88,7 +91,7 @@ class Options:
     contact: str = "persistent"
     samples: int = 8
     zeno_factor: float = 100.0
-    max_steps: int = 10_000_000
+    max_steps: int = MAX_STEPS
 
 
 class Flow(Protocol):

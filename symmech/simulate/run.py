@@ -26,7 +26,7 @@ import sympy as sp
 from symmech.scene import Scene
 from symmech.simulate.arguments import CONTACT_MODES, check_run, states
 from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
-from symmech.simulate.hybrid import run
+from symmech.simulate.hybrid import MAX_STEPS, run
 from symmech.simulate.result import SimulationResult
 from symmech.simulate.system import (
     BACKENDS,
@@ -80,7 +80,7 @@ def simulate(
     atol: float = 1e-10,
     max_step: float | None = None,
     max_events: int = 100_000,
-    max_steps: int = 10_000_000,
+    max_steps: int = MAX_STEPS,
     contact: str = "persistent",
     strategy: str = "auto",
     definitions: Mapping | None = None,

@@ -23,6 +23,7 @@ from typing import Any
 
 from symmech.errors import SymmechError
 from symmech.simulate.arguments import numbers
+from symmech.simulate.hybrid import MAX_STEPS
 from symmech.simulate.result import STATUSES
 
 __all__ = ["add_command", "run_command"]
@@ -45,7 +46,7 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
     sw.add_argument("--atol", type=float, default=1e-10)
     sw.add_argument("--contact", default="persistent", choices=("persistent", "stop"))
     sw.add_argument("--max-events", type=int, default=100_000)
-    sw.add_argument("--max-steps", type=int, default=10_000_000, help="steps per run")
+    sw.add_argument("--max-steps", type=int, default=MAX_STEPS, help="steps per run")
     sw.add_argument("--outputs", default="energy", help="outputs, comma separated")
     sw.add_argument("--chunk", type=int, help="runs per chunk (default: N / (4 workers))")
     sw.add_argument("--threads", type=int, help="local threads (default: every core)")

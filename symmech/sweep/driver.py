@@ -37,7 +37,7 @@ from symmech.errors import SymmechError
 from symmech.scene import Scene
 from symmech.simulate.arguments import check_run, count, states
 from symmech.simulate.csim import INFO_HEAD, library, options_vector
-from symmech.simulate.hybrid import Options
+from symmech.simulate.hybrid import MAX_STEPS, Options
 from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, real_number
 from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
@@ -158,7 +158,7 @@ def sweep(
     atol: float = 1e-10,
     max_step: float | None = None,
     max_events: int = 100_000,
-    max_steps: int = 10_000_000,
+    max_steps: int = MAX_STEPS,
     contact: str = "persistent",
     strategy: str = "auto",
     definitions: Mapping | None = None,
