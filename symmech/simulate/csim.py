@@ -57,8 +57,9 @@ C_METHODS = ("dop853", "tsit5", "rk45", "rk4")
 INFO_HEAD = 23
 # statuses and reasons of the template (enum ST_*, R_*)
 _STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed", 5: "max_steps"}
-_R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL, _R_COND = range(1, 11)
-_R_STEPS = 11
+_R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL, _R_COND, _R_STEPS = (
+    range(1, 12)
+)
 #: info[0] and info[1] of a run that reached t_end: every other row needs :func:`decode`
 FINISHED_CODE, REACHED_END_CODE = 1, _R_END
 _FUNCTIONS: tuple[str, ...] = (
