@@ -245,13 +245,12 @@ def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Exp
     if not definitions:
         return {}
     names = {"t": TIME, **{str(p): p for p in scene.parameters}}
-    d = scene.declaration
-    fields: list[sp.Basic] = [d.metric, d.potential, d.forces, d.constraint_matrix]
-    fields += [d.frame] if d.frame is not None else []
-    for w in d.walls:
-        fields += [w.psi, w.impulsive_matrix, sp.sympify(w.restitution, strict=True)]
-        fields += [w.velocity] if w.velocity is not None else []
-    present = {a for e in fields for a in atoms(e, (AppliedUndef,)) if a.args == (TIME,)}
+    present = {
+        a
+        for e in scene.declaration.expressions()
+        for a in atoms(e, (AppliedUndef,))
+        if a.args == (TIME,)
+    }
     out: dict[sp.Expr, sp.Expr] = {}
     for key, value in definitions.items():
         if isinstance(key, str) and key.isidentifier():

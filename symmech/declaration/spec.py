@@ -206,6 +206,21 @@ class Declaration:
             "name": self.name,
         }
 
+    def expressions(self) -> list[sp.Expr]:
+        """Every declared expression, entry by entry: the metric, the potential, the
+        forces, the constraint rows, the frame, and each wall's gap, impulsive rows and
+        declared velocity (where the scene's functions of t and of q can occur)."""
+        out = [
+            *self.metric,
+            self.potential,
+            *self.forces,
+            *self.constraint_matrix,
+            *(self.frame if self.frame is not None else []),
+        ]
+        for w in self.walls:
+            out.extend([w.psi, *w.impulsive_matrix, *(w.velocity or [])])
+        return out
+
     def q_dot(self) -> sp.ImmutableMatrix:
         """q_dot as a column in the velocity basis: ``S v`` with a frame, else the q_dot symbols."""
         v = sp.Matrix(self.velocities)

@@ -223,17 +223,8 @@ def dump_scene(
             params.append(w.restitution)
     table.update({p.name: p for p in params})
     applied: dict[str, sp.Expr] = {}
-    everything = [
-        *decl.metric,
-        decl.potential,
-        *decl.forces,
-        *decl.constraint_matrix,
-        *(decl.frame if decl.frame is not None else []),
-    ]
-    for w in decl.walls:
-        everything.extend([w.psi, *w.impulsive_matrix, *(w.velocity or [])])
     arguments = (TIME, *q)
-    for e in everything:
+    for e in decl.expressions():
         for f in sorted(sp.sympify(e, strict=True).atoms(AppliedUndef), key=sp.default_sort_key):
             _check_function(f, arguments, applied)
             applied[f.func.__name__] = f
