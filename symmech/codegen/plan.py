@@ -39,7 +39,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
@@ -204,9 +204,7 @@ class _Inputs:
         return (atom.func.__name__, 0)
 
     def substitute(self, e: sp.Expr) -> sp.Expr:
-        e = sp.sympify(e, strict=True)
-        if self.definitions:
-            e = e.subs(self.definitions).doit()
+        e = defined(sp.sympify(e, strict=True), self.definitions)
         found = atoms(e, (sp.Derivative, AppliedUndef))  # one walk over distinct subtrees
         if not found:
             return e
@@ -275,6 +273,12 @@ def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Exp
             raise CodegenError(str(exc)) from None
         out.update(dict.fromkeys(fs, e))
     return out
+
+
+def defined(e: Any, rules: Mapping[sp.Expr, sp.Expr]) -> Any:
+    """``e`` (an expression or a matrix) with the functions of t of
+    :func:`definition_rules` replaced by their expressions, their derivatives evaluated."""
+    return e.subs(rules).doit() if rules else e
 
 
 def _check_constants(scene: Scene, constants: Mapping) -> dict[sp.Symbol, sp.Expr]:

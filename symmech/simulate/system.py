@@ -43,7 +43,7 @@ import sympy as sp
 
 from symmech.codegen import CodegenError, generate
 from symmech.codegen.module import NumericalError, SceneModule
-from symmech.codegen.plan import definition_rules
+from symmech.codegen.plan import defined, definition_rules
 from symmech.codegen.runtime_checks import real_array
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
@@ -317,9 +317,7 @@ class HybridSystem:
         decl = self.scene.declaration
         A = sp.Matrix(contact_rows(self.scene, wall))
         f0 = sp.Matrix(self.scene.forcing()).xreplace({v: 0 for v in decl.velocities})
-        rules = definition_rules(self.scene, self.definitions)
-        if rules:
-            f0 = f0.subs(rules).doit()
+        f0 = defined(f0, definition_rules(self.scene, self.definitions))
         return A.T.LUsolve(-f0)[decl.m]
 
     def locked_force(self, wall: int) -> Any:
