@@ -21,7 +21,7 @@ import sympy as sp
 from symmech.algebra import canonical, numeric
 from symmech.algebra.canonical import fast_add as add
 from symmech.algebra.canonical import fast_mul as mul
-from symmech.algebra.walk import atoms, free_symbols, xreplace
+from symmech.algebra.walk import atoms, free_symbols, free_symbols_of, xreplace
 from symmech.examples import pendulum_on_cart
 from symmech.geometry.connection import forcing
 
@@ -288,6 +288,9 @@ def test_walks_are_sympys() -> None:
         assert atoms(e, types) == e.atoms(*types)
     shared = sp.Integral(x * y, (x, 0, 1)) + sp.Lambda(z, z * y)(x)
     assert free_symbols(shared) == frozenset(shared.free_symbols)
+    many = [_random_expr(rng, 4, odd=True) for _ in range(20)] + [shared]
+    assert free_symbols_of(many) == set().union(*(e.free_symbols for e in many))
+    assert free_symbols_of([]) == set()
 
 
 def test_xreplace_is_sympys() -> None:

@@ -62,7 +62,7 @@ from symmech.algebra import budget as limits
 from symmech.algebra.block_structure import diagonal_blocks
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.laplace import adjugate_det
-from symmech.algebra.walk import free_symbols
+from symmech.algebra.walk import free_symbols_of
 
 __all__ = [
     "RationalField",
@@ -392,7 +392,7 @@ def _over_budget(exprs: Sequence[sp.Expr]) -> str | None:
     :data:`symmech.algebra.budget.FIELD_TERMS` terms or to a degree above
     :data:`symmech.algebra.budget.FIELD_DEGREE` (construct_domain would expand it in full),
     or they need more than :data:`symmech.algebra.budget.FIELD_GENERATORS` generators."""
-    generators = set().union(*(free_symbols(e) for e in exprs))
+    generators = free_symbols_of(exprs)
     if len(generators) > limits.FIELD_GENERATORS:
         return (
             f"the entries need {len(generators)} generators"

@@ -9,9 +9,11 @@ return.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+
 import sympy as sp
 
-__all__ = ["atoms", "free_symbols", "xreplace"]
+__all__ = ["atoms", "free_symbols", "free_symbols_of", "xreplace"]
 
 # sympy's free_symbols of a node that binds no variables: the union over its arguments
 _UNION_OF_ARGS = sp.Basic.free_symbols
@@ -31,6 +33,13 @@ def free_symbols(expr: sp.Basic, memo: dict[sp.Basic, frozenset] | None = None) 
             hit = frozenset(expr.free_symbols)
         memo[expr] = hit
     return hit
+
+
+def free_symbols_of(exprs: Iterable[sp.Basic]) -> set[sp.Basic]:
+    """The union of the free symbols of ``exprs`` (the entries of a matrix, say), each
+    distinct subtree walked once even when several of them share it."""
+    memo: dict[sp.Basic, frozenset] = {}
+    return set().union(*[free_symbols(e, memo) for e in exprs])
 
 
 def atoms(expr: sp.Basic, types: tuple[type, ...]) -> set[sp.Basic]:

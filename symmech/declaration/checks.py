@@ -31,7 +31,7 @@ from symmech.algebra.numeric import (
 )
 from symmech.algebra.rank import generic_rank
 from symmech.algebra.sampling import atom_key, sample_points
-from symmech.algebra.walk import atoms, free_symbols
+from symmech.algebra.walk import atoms, free_symbols_of
 from symmech.algebra.zero import is_zero
 from symmech.declaration.admissible import NON_SMOOTH, expression_problems
 from symmech.declaration.definiteness import Verdict, definiteness
@@ -184,8 +184,7 @@ class Field:
 
     @property
     def symbols(self) -> set[sp.Symbol]:
-        memo: dict[sp.Basic, frozenset] = {}
-        return set().union(*[free_symbols(e, memo) for e in _entries(self.value)])
+        return free_symbols_of(_entries(self.value))
 
 
 @dataclass(frozen=True)

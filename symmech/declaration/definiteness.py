@@ -60,7 +60,7 @@ from symmech.algebra.numeric import (
     proven_sign,
     real_values,
 )
-from symmech.algebra.walk import free_symbols
+from symmech.algebra.walk import free_symbols_of
 
 __all__ = ["SEARCH_EVALUATIONS", "Verdict", "definiteness", "lower_bound"]
 
@@ -349,8 +349,7 @@ def definiteness(
     if kinetic_energy is not None and proven_sign(kinetic_energy) in ("pos", "nonneg"):
         return Verdict("proven", "the kinetic energy is a sum of nonnegative terms")
     n = G.rows
-    memo: dict = {}
-    free = set().union(*(free_symbols(e, memo) for e in G))
+    free = free_symbols_of(G)
     q = [c for c in coordinates if c in free]
     if not q:
         return Verdict("proven", "the metric does not depend on the coordinates")

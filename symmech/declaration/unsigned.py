@@ -15,7 +15,7 @@ import sympy as sp
 
 from symmech.algebra.numeric import EvaluationError, classify_symmetric, real_values
 from symmech.algebra.sampling import atom_key
-from symmech.algebra.walk import free_symbols, xreplace
+from symmech.algebra.walk import free_symbols_of, xreplace
 from symmech.declaration.checks import Points, Problems, check_metric
 from symmech.declaration.symbols import t as TIME
 
@@ -57,8 +57,7 @@ def check_metric_signs(
     check_metric(G, label, points, first, q, T)
     if not first.items:
         return None
-    free_memo: dict = {}
-    free = set().union(*(free_symbols(e, free_memo) for e in G))
+    free = free_symbols_of(G)
     unsigned = [
         p
         for p in params
