@@ -24,6 +24,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Literal
 
+import numpy as np
 import sympy as sp
 
 from symmech.algebra import budget as limits
@@ -317,16 +318,16 @@ def _wall_velocity(declaration: Declaration, value: object, wall: str) -> sp.Mat
     the coordinates, velocities, parameters and t, never evaluated."""
     if isinstance(value, sp.MatrixBase):
         return sp.Matrix(value)
-    items = value.tolist() if hasattr(value, "tolist") else value  # a NumPy array
-    if isinstance(items, str | bytes) or not isinstance(items, Sequence):
+    try:  # the entries as they are (dtype object: nothing converted), a row or a column
+        items = np.asarray(value, dtype=object)
+    except ValueError:  # ragged
+        items = None
+    if items is not None and items.ndim == 2 and 1 in items.shape:
+        items = items.ravel()
+    if items is None or items.ndim != 1:
         raise ImpactError(
             f"wall {wall!r}: wall_velocity must be a sequence or a sympy matrix, got {value!r}"
         )
-    rows = [r for r in items if isinstance(r, Sequence) and not isinstance(r, str)]
-    if len(items) == 1 and len(rows) == 1:  # one row [[a, b, ...]]
-        items = list(rows[0])
-    elif rows and len(rows) == len(items) and all(len(r) == 1 for r in rows):  # a column
-        items = [r[0] for r in rows]
     d = declaration
     names = {str(s): s for s in (*d.coordinates, *d.velocities, *d.parameters, TIME)}
     try:
