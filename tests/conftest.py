@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import difflib
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).parent))
+
+#: The committed generated files (tests/golden/<case>/<file>).
+GOLDEN = Path(__file__).parent / "golden"
 
 
 def pytest_addoption(parser):
@@ -15,6 +21,40 @@ def pytest_addoption(parser):
         default=False,
         help="rewrite tests/golden/ from the current code generator (prints the diff)",
     )
+
+
+def _diff(old: str, new: str, path: Path) -> str:
+    name = str(path.relative_to(GOLDEN.parent))
+    return "".join(
+        difflib.unified_diff(
+            old.splitlines(keepends=True), new.splitlines(keepends=True), f"a/{name}", f"b/{name}"
+        )
+    )
+
+
+@pytest.fixture
+def golden(request, capsys):
+    """``golden(case, filename, text)``: ``text`` must equal tests/golden/<case>/<filename>;
+    with ``pytest --update-golden`` the file is rewritten instead and the diff printed.
+    The one implementation of the switch for every golden test."""
+
+    def check(case: str, filename: str, text: str) -> None:
+        path = GOLDEN / case / filename
+        old = path.read_text(encoding="utf-8") if path.is_file() else ""
+        if request.config.getoption("--update-golden"):
+            if old != text:
+                with capsys.disabled():
+                    print(_diff(old, text, path))
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(text, encoding="utf-8")
+            return
+        assert path.is_file(), f"{path} is missing; run pytest --update-golden"
+        if old != text:
+            diff = "".join(_diff(old, text, path).splitlines(keepends=True)[:80])
+            why = f"{filename} differs from its golden file (pytest --update-golden)"
+            pytest.fail(f"{why}:\n{diff}")
+
+    return check
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus, config):

@@ -7,7 +7,6 @@ CI (CI=true), where that is a failure (``codegen_support.require_c_compiler``).
 
 from __future__ import annotations
 
-import difflib
 import re
 import subprocess
 from pathlib import Path
@@ -30,7 +29,6 @@ from symmech.examples import (
     pendulum_on_cart,
 )
 
-GOLDEN = Path(__file__).parent / "golden"
 STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 
 
@@ -418,47 +416,16 @@ GOLDEN_SCENES = {
 
 @pytest.mark.parametrize("target", ["c", "numpy"])
 @pytest.mark.parametrize("name", sorted(GOLDEN_SCENES))
-def test_golden_files(request, capsys, name, target):
+def test_golden_files(golden, name, target):
     """The generated files equal tests/golden/<scene>/, the CPython extension of a C target
     (``<stem>_python.c``) included; update with --update-golden."""
     code = codegen.generate(GOLDEN_SCENES[name](), target)
-    folder = GOLDEN / name
-    update = request.config.getoption("--update-golden")
     outputs = dict(code.files)
     if code.extension:
         outputs[f"{code.stem}_python.c"] = code.extension
     assert (target == "c") == bool(code.extension)
     for filename, text in outputs.items():
-        path = folder / filename
-        old = path.read_text(encoding="utf-8") if path.is_file() else ""
-        if update:
-            if old != text:
-                diff = difflib.unified_diff(
-                    old.splitlines(keepends=True),
-                    text.splitlines(keepends=True),
-                    f"a/{path.relative_to(GOLDEN.parent)}",
-                    f"b/{path.relative_to(GOLDEN.parent)}",
-                )
-                with capsys.disabled():
-                    print("".join(diff))
-                folder.mkdir(parents=True, exist_ok=True)
-                path.write_text(text, encoding="utf-8")
-            continue
-        assert path.is_file(), f"{path} is missing; run pytest --update-golden"
-        if old != text:
-            diff = "".join(
-                list(
-                    difflib.unified_diff(
-                        old.splitlines(keepends=True),
-                        text.splitlines(keepends=True),
-                        str(path),
-                        "generated",
-                    )
-                )[:80]
-            )
-            pytest.fail(
-                f"{path.name} differs from its golden file (pytest --update-golden):\n{diff}"
-            )
+        golden(name, filename, text)
 
 
 def test_numpy_solve_refuses_non_finite_inputs_for_one_state_and_a_batch():

@@ -11,11 +11,9 @@ ball is a golden file (``pytest --update-golden`` refreshes it and prints the di
 
 from __future__ import annotations
 
-import difflib
 import math
 import subprocess
 import warnings
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -37,7 +35,6 @@ from symmech.simulate import SimulationError, simulate_batch, system_for
 from symmech.simulate.csim import C_METHODS, simulator_source
 from tests.codegen_support import require_c_compiler
 
-GOLDEN = Path(__file__).parent / "golden"
 STRICT = ["-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-pedantic"]
 BALL = {"m": 1.0, "g": 9.81, "alpha": 0.5}
 ELLIPSE = {"m": 1, "I": 5 / 16, "a": 1, "b": 0.5, "g": 9.81, "alpha": 0.8}
@@ -449,25 +446,11 @@ def test_equations_alone_get_no_simulator_code():
     assert not any("sim_run" in text for text in code.files.values())
 
 
-def test_simulator_golden_file(request, capsys):
+def test_simulator_golden_file(golden):
     """The rendered simulator of the bouncing ball equals its golden file."""
     files = simulator_source(system_for(bouncing_ball(), "c"))
-    folder = GOLDEN / "simulator_bouncing_ball"
     name = "symmech_bouncing_ball_simulator.c"
-    text = files[name]
-    path = folder / name
-    old = path.read_text(encoding="utf-8") if path.is_file() else ""
-    if request.config.getoption("--update-golden"):
-        if old != text:
-            with capsys.disabled():
-                print("".join(difflib.unified_diff(old.splitlines(True), text.splitlines(True))))
-            folder.mkdir(parents=True, exist_ok=True)
-            path.write_text(text, encoding="utf-8")
-        return
-    assert path.is_file(), f"{path} is missing; run pytest --update-golden"
-    if old != text:
-        diff = "".join(list(difflib.unified_diff(old.splitlines(True), text.splitlines(True)))[:80])
-        pytest.fail(f"{name} differs from its golden file (pytest --update-golden):\n{diff}")
+    golden("simulator_bouncing_ball", name, files[name])
 
 
 def test_tableaux_are_printed_exactly():

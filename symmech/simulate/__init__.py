@@ -1,6 +1,7 @@
 """Hybrid simulation of scenes with walls: flow, events, impact maps, resting contact.
 
-``simulate(scene, q0, v0, t_end, ...)`` runs one trajectory (:mod:`.api`); the package
+``simulate(scene, q0, v0, t_end, ...)`` runs one trajectory (:mod:`.run`) on one of the
+backends of :mod:`.backend`, with the options of :mod:`.options`; the package
 itself is callable, so ``symmech.simulate(scene, ...)`` is that function;
 ``simulate_batch`` runs many in one call of the generated C loop (:mod:`.batch`).  The
 loop itself is described in :mod:`.hybrid`, event location in :mod:`.events`, the
@@ -11,17 +12,21 @@ contact modes) in :mod:`.system`.
 import sys
 import types
 
+from symmech.simulate.backend import BACKENDS, Backend
 from symmech.simulate.batch import BatchResult, simulate_batch
+from symmech.simulate.options import CONTACT_MODES, RunOptions
 from symmech.simulate.result import Event, SimulationResult
-from symmech.simulate.run import CONTACT_MODES, simulate, system_for
-from symmech.simulate.system import BACKENDS, HybridSystem, SimulationError, contact_scene
+from symmech.simulate.run import simulate, system_for
+from symmech.simulate.system import HybridSystem, SimulationError, contact_scene
 
 __all__ = [
     "BACKENDS",
     "CONTACT_MODES",
+    "Backend",
     "BatchResult",
     "Event",
     "HybridSystem",
+    "RunOptions",
     "SimulationError",
     "SimulationResult",
     "contact_scene",

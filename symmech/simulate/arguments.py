@@ -1,67 +1,27 @@
-"""Checks of a run's input, shared by ``simulate`` and ``simulate_batch``.
+"""Checks of a run's input values, shared by ``simulate``, ``simulate_batch``, ``sweep``
+and the run options (:mod:`symmech.simulate.options`).
 
 Every argument is checked before anything is generated or run, and a problem raises
 :class:`~symmech.simulate.system.SimulationError` naming the argument (and the row, for a
-batch): states of the right shape, real and finite; ``t_end > t0``, both finite;
-``100 eps <= rtol < 1`` (float64 cannot deliver less), ``atol > 0``, ``max_step > 0``;
-``max_events``, ``max_steps`` and ``event_samples`` positive integers; ``contact`` one of
-:data:`CONTACT_MODES`.
+batch): states of the right shape, real and finite; positive numbers; counts.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from symmech.simulate.hybrid import MAX_STEPS, Options
 from symmech.simulate.system import SimulationError, real_scalar, real_values
 
 __all__ = [
-    "CONTACT_MODES",
     "MAX_COUNT",
     "MAX_EVENT_SAMPLES",
-    "RunOptions",
-    "check_run",
     "count",
     "numbers",
     "positive",
     "states",
 ]
-
-#: What to do at an accumulation of impacts.
-CONTACT_MODES = ("persistent", "stop")
-
-EPS = float(np.finfo(float).eps)
-
-
-@dataclass(frozen=True)
-class RunOptions:
-    """The checked options of a run."""
-
-    t0: float
-    t_end: float
-    rtol: float
-    atol: float
-    max_step: float
-    max_events: int
-    event_samples: int
-    contact: str
-    max_steps: int = MAX_STEPS
-
-    def loop(self) -> Options:
-        """The options of the hybrid loop (:class:`symmech.simulate.hybrid.Options`)."""
-        return Options(
-            t_end=self.t_end,
-            rtol=self.rtol,
-            atol=self.atol,
-            max_events=self.max_events,
-            contact=self.contact,
-            samples=self.event_samples,
-            max_steps=self.max_steps,
-        )
 
 
 def positive(value: object, what: str) -> float:
@@ -107,47 +67,6 @@ def states(value: object, n: int, what: str, *, rows: bool = False) -> np.ndarra
     if not np.isfinite(a).all():
         raise SimulationError(f"{what}: every entry must be finite, got {a.tolist()}")
     return a
-
-
-def check_run(
-    *,
-    t0: Any,
-    t_end: Any,
-    rtol: Any,
-    atol: Any,
-    max_step: Any,
-    max_events: Any,
-    event_samples: Any,
-    contact: Any,
-    max_steps: Any = MAX_STEPS,
-) -> RunOptions:
-    """The checked options (see the module docstring)."""
-    if contact not in CONTACT_MODES:
-        raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {contact!r}")
-    t0f, tend = real_scalar(t0, "t0"), real_scalar(t_end, "t_end")
-    if not (math.isfinite(t0f) and math.isfinite(tend)):
-        raise SimulationError(f"t0 and t_end must be finite, got {t0!r}, {t_end!r}")
-    if not tend > t0f:
-        raise SimulationError(f"t_end must be greater than t0 = {t0f!r}, got {t_end!r}")
-    rtol_f = positive(rtol, "rtol")
-    if not rtol_f < 1:
-        raise SimulationError(f"rtol must be below 1, got {rtol!r}")
-    if rtol_f < 100 * EPS:
-        raise SimulationError(
-            f"rtol = {rtol!r} is below 100 eps = {100 * EPS:.3g}: float64 cannot deliver it"
-            " (use symmech.simulate.reference for more digits)"
-        )
-    return RunOptions(
-        t0=t0f,
-        t_end=tend,
-        rtol=rtol_f,
-        atol=positive(atol, "atol"),
-        max_step=tend - t0f if max_step is None else positive(max_step, "max_step"),
-        max_events=count(max_events, "max_events"),
-        event_samples=count(event_samples, "event_samples", MAX_EVENT_SAMPLES),
-        contact=contact,
-        max_steps=count(max_steps, "max_steps"),
-    )
 
 
 def numbers(text: str, what: str) -> list[float]:

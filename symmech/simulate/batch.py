@@ -28,16 +28,19 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.arguments import check_run, count, states
+from symmech.simulate.arguments import count, states
+from symmech.simulate.backend import backend_named
 from symmech.simulate.csim import (
+    EVENT_COUNTS,
     FINISHED_CODE,
-    INFO_HEAD,
     REACHED_END_CODE,
     decode,
+    info_entry,
     library,
     options_vector,
 )
-from symmech.simulate.hybrid import MAX_STEPS
+from symmech.simulate.options import RunOptions
+from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, check_parameters
@@ -46,7 +49,9 @@ __all__ = ["BatchResult", "simulate_batch"]
 
 #: the head of the info row of a run that reached t_end (status finished, reason t_end)
 _REACHED_ROW = np.zeros(INFO_HEAD)
-_REACHED_ROW[0], _REACHED_ROW[1] = FINISHED_CODE, REACHED_END_CODE
+_REACHED_ROW[slot(INFO, "status")] = FINISHED_CODE
+_REACHED_ROW[slot(INFO, "reason")] = REACHED_END_CODE
+_STATUS, _REASON = slot(INFO, "status"), slot(INFO, "reason")
 
 
 @dataclass(frozen=True)
@@ -90,50 +95,37 @@ def simulate_batch(
     t_end: float,
     *,
     params: Mapping[str, float] | Any = None,
-    t0: float = 0.0,
-    method: str = "dop853",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
-    max_step: float | None = None,
-    max_events: int = 100_000,
-    max_steps: int = MAX_STEPS,
-    contact: str = "persistent",
+    options: RunOptions | None = None,
     threads: int | None = None,
     strategy: str = "auto",
     definitions: Mapping | None = None,
-    event_samples: int = 8,
+    **run_options: Any,
 ) -> BatchResult:
     """Run ``simulate(scene, Q0[i], V0[i], t_end, backend="c", ...)`` for every row i in
     the compiled C loop and return the final states, statuses and event counts (see the
-    module docstring).  ``threads``: the number of Python threads running chunks of rows
-    (default: every core); the results do not depend on it."""
+    module docstring).  The run options are :func:`symmech.simulate.simulate`'s
+    (:class:`~symmech.simulate.options.RunOptions`, as keywords or ``options``).
+    ``threads``: the number of Python threads running chunks of rows (default: every
+    core); the results do not depend on it."""
     if not isinstance(scene, Scene):
         raise SimulationError(f"scene: expected a symmech.Scene, got {type(scene).__name__}")
-    o = check_run(
-        t0=t0,
-        t_end=t_end,
-        rtol=rtol,
-        atol=atol,
-        max_step=max_step,
-        max_events=max_events,
-        event_samples=event_samples,
-        contact=contact,
-        max_steps=max_steps,
-    )
+    engine = backend_named("c", "batch")
+    o = RunOptions.build(options, run_options)
+    tend = o.end(t_end)
+    method = engine.method(o.method)
     n = scene.n
     Q = states(Q0, n, "Q0", rows=True)
     V = states(V0, n, "V0", rows=True)
     if Q.shape[0] != V.shape[0]:
         raise SimulationError(f"Q0 and V0: {Q.shape[0]} rows against {V.shape[0]} rows")
-    t0f, tend, rtol_f, atol_f = o.t0, o.t_end, o.rtol, o.atol
+    t0f, rtol_f, atol_f = o.t0, o.rtol, o.atol
     if threads is None:
         threads = os.cpu_count() or 1
     threads = count(threads, "threads")
     values = check_parameters(scene, params)
     system = system_for(scene, "c", strategy, definitions)
     fns = Functions(system, values)
-    opts = o.loop()
-    index, vec = options_vector(opts, method, o.max_step, t0f)
+    index, vec = options_vector(o.loop(tend), method, o.step_cap(tend), t0f)
     _check_rows(fns, values, Q, V, t0f, rtol_f, atol_f)
     lib = library(system)
     P = lib.parameters(values)
@@ -165,18 +157,19 @@ def simulate_batch(
     status = np.full(N, STATUSES.index(finished), dtype=np.int64)
     messages = [reached] * N
     acc = np.full(N, np.nan)
-    for k in np.flatnonzero((info[:, 0] != _REACHED_ROW[0]) | (info[:, 1] != _REACHED_ROW[1])):
+    unusual = (info[:, _STATUS] != FINISHED_CODE) | (info[:, _REASON] != REACHED_END_CODE)
+    for k in np.flatnonzero(unusual):
         st, msg, a = decode(info[k], fns.wall_names, tend)
         status[k], messages[k] = STATUSES.index(st), msg
         acc[k] = np.nan if a is None else a
     return BatchResult(
-        t=info[:, 21].copy(),
+        t=info_entry(info, "last_t").copy(),
         q=info[:, INFO_HEAD : INFO_HEAD + n].copy(),
         v=info[:, INFO_HEAD + n :].copy(),
         status=status,
-        events=info[:, 17:21].astype(np.int64),
+        events=info[:, EVENT_COUNTS].astype(np.int64),
         accumulation_time=acc,
-        steps=info[:, 11].astype(np.int64),
+        steps=info_entry(info, "steps").astype(np.int64),
         messages=tuple(messages),
     )
 

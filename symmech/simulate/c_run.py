@@ -27,8 +27,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from symmech.simulate.csim import INFO_HEAD, CLibrary, decode, library, options_vector
+from symmech.simulate.csim import (
+    EVENT_COUNTS,
+    CLibrary,
+    decode,
+    info_entry,
+    library,
+    options_vector,
+)
 from symmech.simulate.hybrid import Options
+from symmech.simulate.protocol import EVENT_KINDS, INFO_HEAD
 from symmech.simulate.result import STATUSES, EventTable, SimulationResult
 from symmech.simulate.system import HybridSystem
 
@@ -207,19 +215,20 @@ def run_c(
         n,
     )
     segments = _Segments(segs[0] if len(segs) == 1 else np.concatenate(segs), ny)
+    by_kind = dict(zip(EVENT_KINDS, (int(x) for x in info[EVENT_COUNTS]), strict=True))
     stats = {
-        "steps": int(info[11]),
-        "rejected_steps": int(info[12]),
-        "rhs_calls": int(info[13]),
+        "steps": int(info_entry(info, "steps")),
+        "rejected_steps": int(info_entry(info, "rejected_steps")),
+        "rhs_calls": int(info_entry(info, "rhs_calls")),
         "jacobian_calls": 0,
         "wall_time": _time.perf_counter() - clock,
-        "constraint_drift": float(info[14]),
-        "impact_condition": float(info[22]),
-        "energy_drift": float(info[15]) if spec.energy_conserved else None,
-        "impacts": int(info[17]),
-        "grazing": int(info[18]),
-        "contacts": int(info[19]),
-        "releases": int(info[20]),
+        "constraint_drift": float(info_entry(info, "constraint_drift")),
+        "impact_condition": float(info_entry(info, "impact_condition")),
+        "energy_drift": float(info_entry(info, "energy_drift")) if spec.energy_conserved else None,
+        "impacts": by_kind["impact"],
+        "grazing": by_kind["grazing"],
+        "contacts": by_kind["contact"],
+        "releases": by_kind["release"],
     }
     assert status in STATUSES
     return SimulationResult(

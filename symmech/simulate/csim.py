@@ -37,6 +37,16 @@ from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
 from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
 from symmech.simulate.hybrid import COND_LIMIT, Options
+from symmech.simulate.protocol import (
+    FUNCTIONS,
+    INFO,
+    INFO_HEAD,
+    OPTIONS,
+    REASONS,
+    RUN_STATES,
+    c_enums,
+    slot,
+)
 from symmech.simulate.steppers import ExplicitRK, c_tableau, stepper
 from symmech.simulate.system import Functions, HybridSystem, SimulationError
 
@@ -53,25 +63,8 @@ __all__ = [
 #: Methods of the C loop, in the order of the template's tableaux.
 C_METHODS = ("dop853", "tsit5", "rk45", "rk4")
 
-#: Entries of a run's info row before the state (see the template's ``info``).
-INFO_HEAD = 23
-# statuses and reasons of the template (enum ST_*, R_*)
-_STATUS = {1: "finished", 2: "zeno", 3: "max_events", 4: "failed", 5: "max_steps"}
-_R_END, _R_MAX, _R_SEQ, _R_ACC, _R_REST, _R_RHS, _R_SMALL, _R_FIXED, _R_CALL, _R_COND, _R_STEPS = (
-    range(1, 12)
-)
-#: info[0] and info[1] of a run that reached t_end: every other row needs :func:`decode`
-FINISHED_CODE, REACHED_END_CODE = 1, _R_END
-_FUNCTIONS: tuple[str, ...] = (
-    "psi",
-    "dpsi",
-    "psi_t",
-    "impact",
-    "energy",
-    "projector_P",
-    "constraint_residual",
-    "multipliers",
-)
+#: info[status] and info[reason] of a run that reached t_end: every other row needs :func:`decode`
+FINISHED_CODE, REACHED_END_CODE = slot(RUN_STATES, "finished"), slot(REASONS, "end")
 _WALL_KINDS = ("psi", "dpsi", "psi_t", "impact")
 _TEMPLATE = "c/simulator.c.jinja"
 
@@ -283,6 +276,7 @@ def simulator_source(system: HybridSystem) -> dict[str, str]:
             m=spec.m,
             has_frame=spec.has_frame,
             cond_limit=repr(COND_LIMIT),
+            enums=c_enums(),
             calls=spec.calls,
             methods=C_METHODS,
             tableaux=_tableaux(),
@@ -358,7 +352,8 @@ def library(system: HybridSystem) -> CLibrary:
 def options_vector(
     opts: Options, method: str, max_step: float, t0: float
 ) -> tuple[int, np.ndarray]:
-    """The method's index and the C loop's option vector (see the template's ``new``).
+    """The method's index and the C loop's option vector (entries
+    :data:`~symmech.simulate.protocol.OPTIONS`, read by the template's ``new``).
 
     ``rk4`` steps with ``max_step`` when it is shorter than the span, else span/1000 (as
     :func:`symmech.simulate.simulate` chooses for the NumPy loop)."""
@@ -371,41 +366,56 @@ def options_vector(
     fixed = 0.0
     if method == "rk4":
         fixed = max_step if max_step < span else span / 1000
-    vec = [
-        opts.rtol,
-        opts.atol,
-        max_step,
-        fixed,
-        opts.t_end,
-        opts.zeno_factor,
-        float(opts.max_events),
-        float(opts.contact == "stop"),
-        float(opts.samples),
-        float(opts.max_steps),
-    ]
-    return C_METHODS.index(method), np.array(vec, dtype=np.float64)
+    entries = {
+        "rtol": opts.rtol,
+        "atol": opts.atol,
+        "max_step": max_step,
+        "fixed_step": fixed,
+        "t_end": opts.t_end,
+        "zeno_factor": opts.zeno_factor,
+        "max_events": float(opts.max_events),
+        "contact_stop": float(opts.contact == "stop"),
+        "samples": float(opts.samples),
+        "max_steps": float(opts.max_steps),
+    }
+    vec = np.array([entries[k] for k in OPTIONS], dtype=np.float64)
+    return C_METHODS.index(method), vec
+
+
+def info_entry(info: np.ndarray, name: str) -> np.ndarray:
+    """Entry ``name`` of :data:`~symmech.simulate.protocol.INFO` of an info row (or of
+    every row of a 2-D block)."""
+    return info[..., INFO.index(name)]
+
+
+#: The entries of the event counts in an info row, in the order of the event kinds.
+EVENT_COUNTS = slice(INFO.index("impacts"), INFO.index("releases") + 1)
 
 
 def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str, str, float | None]:
     """(status, message, accumulation time) of a run's info row, in the words of :mod:`.hybrid`."""
-    status = _STATUS.get(int(info[0]), "failed")
-    reason, wall, why, sub, fn = (int(x) for x in info[1:6])
-    d = [float(x) for x in info[7:11]]
+    code = int(info[INFO.index("status")])
+    status = RUN_STATES[code] if 0 < code < len(RUN_STATES) else "failed"
+    reason_code, wall, why, sub, fn = (
+        int(info[INFO.index(k)]) for k in ("reason", "wall", "why", "sub", "function")
+    )
+    reason = REASONS[reason_code] if 0 <= reason_code < len(REASONS) else "unknown"
+    d = [float(info[INFO.index(f"d{i}")]) for i in range(4)]
     walls = len(names)
-    if reason == _R_END:
+    if reason == "end":
         return status, f"reached t_end = {t_end!r}", None
-    if reason == _R_MAX:
+    if reason == "max_events":
         return status, f"stopped after {int(d[1])} events at t = {d[0]!r}", None
-    if reason == _R_STEPS:
+    if reason == "max_steps":
         return status, f"stopped after {int(d[1])} steps at t = {d[0]!r}", None
-    if reason == _R_SEQ:
+    if reason == "sequential":
         return (
             status,
             f"simultaneous impacts at t = {d[0]!r} did not resolve in"
             f" {100 * walls} applications of the sequential rule",
             None,
         )
-    if reason == _R_ACC:
+    if reason == "accumulation":
         why_text = (
             "contact=stop"
             if why == 0
@@ -419,7 +429,7 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
             f" (last impact at t = {d[1]!r}, rebound speed {d[2]:.3g}); stopped: {why_text}",
             d[0],
         )
-    if reason == _R_REST:
+    if reason == "rest":
         reason_text = (
             "grazing contact with the wall pressing",
             f"accumulation of impacts (t* ~ {d[1]!r})",
@@ -436,13 +446,13 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
             f" ({reason_text}); stopped: {why_rest[why]}",
             d[0],
         )
-    if reason == _R_RHS:
+    if reason == "rhs_nonfinite":
         return status, f"the right-hand side is not finite at t = {d[0]!r}", None
-    if reason == _R_SMALL:
+    if reason == "step_small":
         return status, f"step size {d[0]:.3g} too small at t = {d[1]!r}", None
-    if reason == _R_FIXED:
+    if reason == "fixed_nonfinite":
         return status, f"non-finite state after a fixed step at t = {d[0]!r}", None
-    if reason == _R_COND:
+    if reason == "condition":
         return (
             status,
             f"wall {names[wall]!r} is nearly dependent on the constraints at"
@@ -450,7 +460,7 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
             f" {d[1]:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
             None,
         )
-    if reason == _R_CALL:
-        name = _FUNCTIONS[fn] if 0 <= fn < len(_FUNCTIONS) else "a generated function"
+    if reason == "call_failed":
+        name = FUNCTIONS[fn][1] if 0 <= fn < len(FUNCTIONS) else "a generated function"
         return status, f"the generated function {name} failed at t = {d[0]!r}", None
-    return "failed", f"the C loop ended without a status (reason {reason})", None
+    return "failed", f"the C loop ended without a status (reason {reason_code})", None

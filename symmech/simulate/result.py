@@ -18,13 +18,12 @@ from typing import Any, overload
 
 import numpy as np
 
+from symmech.simulate.protocol import EVENT_KINDS, RUN_STATES
+
 __all__ = ["STATUSES", "Event", "EventTable", "SimulationResult"]
 
-#: Final statuses of a run.
-STATUSES = ("finished", "zeno", "max_events", "failed", "max_steps")
-
-#: Kinds of events.
-EVENT_KINDS = ("impact", "grazing", "contact", "release")
+#: Final statuses of a run (the run states of the C loop after ``running``).
+STATUSES = RUN_STATES[1:]
 
 
 @dataclass(frozen=True)

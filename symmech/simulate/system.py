@@ -50,7 +50,6 @@ from symmech.errors import SymmechError
 from symmech.scene import Scene
 
 __all__ = [
-    "BACKENDS",
     "HybridSystem",
     "SimulationError",
     "contact_scene",
@@ -58,10 +57,6 @@ __all__ = [
     "real_scalar",
     "real_values",
 ]
-
-#: Backends of the simulator: the loop in generated C, in Python over the generated NumPy
-#: module, or in Python around SciPy's ``OdeSolver`` classes over the generated C rhs.
-BACKENDS = ("c", "numpy", "scipy")
 
 
 class SimulationError(SymmechError, ValueError):

@@ -37,13 +37,15 @@ from symmech.codegen.module import NumericalError
 from symmech.declaration.symbols import t as TIME
 from symmech.scene import Scene
 from symmech.simulate.csim import (
+    EVENT_COUNTS,
     FINISHED_CODE,
-    INFO_HEAD,
     REACHED_END_CODE,
     decode,
+    info_entry,
     parameter_vector,
 )
 from symmech.simulate.hybrid import Options
+from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.system import Functions, HybridSystem, SimulationError, check_parameters
 from symmech.sweep.grid import Columns
@@ -64,14 +66,18 @@ __all__ = [
 #: The info row's status and reason of a run that reached t_end (the template's
 #: ST_FINISHED and R_END, decoded by :func:`symmech.simulate.csim.decode`).
 _FINISHED, _REACHED_END = FINISHED_CODE, REACHED_END_CODE
+_STATUS, _REASON = slot(INFO, "status"), slot(INFO, "reason")
 
 #: Outputs read from the C loop's statistics (entry of the info row).
 INFO_OUTPUTS = {
-    "rejected_steps": 12,
-    "rhs_calls": 13,
-    "constraint_drift": 14,
-    "energy_drift": 15,
-    "impact_condition": 22,
+    name: slot(INFO, name)
+    for name in (
+        "rejected_steps",
+        "rhs_calls",
+        "constraint_drift",
+        "energy_drift",
+        "impact_condition",
+    )
 }
 
 #: Columns of every sweep table besides the grid's and the state's (``<name>_final``).
@@ -447,7 +453,8 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
         # a run that reached t_end decodes to ("finished", "reached t_end = ...", None):
         # only the others are decoded one by one
         status[sent] = _FINISHED_STATUS
-        for row in np.flatnonzero((info[:, 0] != _FINISHED) | (info[:, 1] != _REACHED_END)):
+        unusual = (info[:, _STATUS] != _FINISHED) | (info[:, _REASON] != _REACHED_END)
+        for row in np.flatnonzero(unusual):
             st, msg, acc = decode(info[row], walls, plan.options.t_end)
             i = sent[row]
             status[i] = RUN_STATUSES.index(st)
@@ -457,11 +464,11 @@ def finish(plan: Plan, prep: Prepared, info: np.ndarray | None, error: str | Non
         # every run sent, in order (one parameter vector, none refused): slices, not
         # fancy indexing, for the columns below
         at: Any = slice(None) if sent.size == r and np.array_equal(sent, np.arange(r)) else sent
-        t[at] = info[:, 21]
+        t[at] = info_entry(info, "last_t")
         q[at] = info[:, INFO_HEAD : INFO_HEAD + n]
         v[at] = info[:, INFO_HEAD + n : INFO_HEAD + 2 * n]
-        counts[at] = info[:, 17:21]
-        steps[at] = info[:, 11]
+        counts[at] = info[:, EVENT_COUNTS]
+        steps[at] = info_entry(info, "steps")
         for key, col in stats.items():
             col[at] = info[:, INFO_OUTPUTS[key]]
         if "energy_drift" in stats and not plan.energy_conserved:

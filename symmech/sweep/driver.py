@@ -35,9 +35,11 @@ from symmech.declaration.expressions import parse_expression
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
-from symmech.simulate.arguments import check_run, count, states
+from symmech.simulate.arguments import count, states
+from symmech.simulate.backend import backend_named
 from symmech.simulate.csim import INFO_HEAD, library, options_vector
-from symmech.simulate.hybrid import MAX_STEPS, Options
+from symmech.simulate.hybrid import Options
+from symmech.simulate.options import RunOptions
 from symmech.simulate.run import system_for
 from symmech.simulate.system import Functions, SimulationError, real_number
 from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
@@ -61,26 +63,13 @@ def _base_state(value: object, n: int, what: str) -> np.ndarray:
     return np.full(n, np.nan) if value is None else states(value, n, what)
 
 
-def _loop(
-    t0: float, t_end: float, rtol: float, atol: float, max_step: float | None,
-    max_events: int, max_steps: int, contact: str, samples: int, method: str, width: int,
-) -> tuple[Options, LoopOptions]:  # fmt: skip
-    """The sweep-wide options, checked by :func:`symmech.simulate.arguments.check_run`
-    as for :func:`symmech.simulate.simulate`."""
-    o = check_run(
-        t0=t0,
-        t_end=t_end,
-        rtol=rtol,
-        atol=atol,
-        max_step=max_step,
-        max_events=max_events,
-        event_samples=samples,
-        contact=contact,
-        max_steps=max_steps,
-    )
-    opts = o.loop()
-    index, vec = options_vector(opts, method, o.max_step, o.t0)
-    return opts, LoopOptions(t0=o.t0, method=index, vector=vec, width=width)
+def _loop(opts: RunOptions, t_end: object, width: int) -> tuple[Options, LoopOptions]:
+    """The sweep-wide options of the C loop (checked as for :func:`symmech.simulate.simulate`)."""
+    tend = opts.end(t_end)
+    method = backend_named("c", "batch").method(opts.method)
+    loop = opts.loop(tend)
+    index, vec = options_vector(loop, method, opts.step_cap(tend), opts.t0)
+    return loop, LoopOptions(t0=opts.t0, method=index, vector=vec, width=width)
 
 
 def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, sp.Expr]:
@@ -152,17 +141,10 @@ def sweep(
     threads: int | None = None,
     store: str | os.PathLike[str] | None = None,
     progress: bool | None = None,
-    t0: float = 0.0,
-    method: str = "dop853",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
-    max_step: float | None = None,
-    max_events: int = 100_000,
-    max_steps: int = MAX_STEPS,
-    contact: str = "persistent",
+    options: RunOptions | None = None,
     strategy: str = "auto",
     definitions: Mapping | None = None,
-    event_samples: int = 8,
+    **run_options: Any,
 ) -> Any:
     """Run ``scene`` for every row of ``grid`` and return a pandas DataFrame, one row per
     run (see the module docstring and :mod:`symmech.sweep.grid` for the columns).
@@ -175,8 +157,9 @@ def sweep(
     ``chunk``: runs per chunk (default ``ceil(N / (4 workers))``, at most 10^4).
     ``store``: a folder that receives each finished chunk as a Parquet part; a rerun of the
     same sweep skips the chunks stored (:mod:`symmech.sweep.store`).  ``progress``: a
-    progress bar on stderr (default: on a terminal, after a second).  The other options are
-    :func:`symmech.simulate.simulate`'s, shared by every run.  The results do not depend on
+    progress bar on stderr (default: on a terminal, after a second).  The run options are
+    :func:`symmech.simulate.simulate`'s (:class:`~symmech.simulate.options.RunOptions`, as
+    keywords or ``options``), shared by every run.  The results do not depend on
     ``chunk``, ``threads`` or the route: each run is independent and runs the same C code.
     """
     if not isinstance(scene, Scene):
@@ -188,6 +171,7 @@ def sweep(
         raise SimulationError(
             f"sweep needs pandas and pyarrow ({exc}): python3 -m pip install 'symmech[sweep]'"
         ) from None
+    run = RunOptions.build(options, run_options)
     names, table = read_grid(grid)
     columns = resolve_columns(scene, names)
     n = scene.n
@@ -237,10 +221,7 @@ def sweep(
         raise SimulationError(
             f"client: expected a dask.distributed.Client, got {type(client).__name__}"
         )
-    opts, loop = _loop(
-        t0, t_end, rtol, atol, max_step, max_events, max_steps, contact, event_samples, method,
-        INFO_HEAD + 2 * n,
-    )  # fmt: skip
+    opts, loop = _loop(run, t_end, INFO_HEAD + 2 * n)
     system = system_for(scene, "c", strategy, definitions)
     fns = Functions(system, {p: 1.0 for p in pnames})
     lib = library(system)

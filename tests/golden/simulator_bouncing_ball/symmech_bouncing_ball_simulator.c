@@ -40,14 +40,14 @@
 #define EPS 2.220446049250313e-16
 #define KROWS 16
 
-/* statuses, reasons and event kinds (decoded by symmech/simulate/csim.py) */
-enum { ST_RUNNING = 0, ST_FINISHED, ST_ZENO, ST_MAX_EVENTS, ST_FAILED, ST_MAX_STEPS };
-enum {
-    R_NONE = 0, R_END, R_MAX_EVENTS, R_SEQUENTIAL, R_ACCUMULATION, R_REST, R_RHS_NONFINITE,
-    R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION, R_MAX_STEPS
-};
-enum { K_IMPACT = 0, K_GRAZING, K_CONTACT, K_RELEASE };
-enum { F_PSI = 0, F_DPSI, F_PSI_T, F_IMPACT, F_ENERGY, F_PROJECT, F_RESIDUAL, F_FORCE };
+/* statuses, reasons, event kinds, functions, options and info entries: the tables of
+   symmech/simulate/protocol.py, numbered in order */
+enum { ST_RUNNING, ST_FINISHED, ST_ZENO, ST_MAX_EVENTS, ST_FAILED, ST_MAX_STEPS, ST_COUNT };
+enum { R_NONE, R_END, R_MAX_EVENTS, R_SEQUENTIAL, R_ACCUMULATION, R_REST, R_RHS_NONFINITE, R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION, R_MAX_STEPS, R_COUNT };
+enum { K_IMPACT, K_GRAZING, K_CONTACT, K_RELEASE, K_COUNT };
+enum { F_PSI, F_DPSI, F_PSI_T, F_IMPACT, F_ENERGY, F_PROJECT, F_RESIDUAL, F_FORCE, F_COUNT };
+enum { OPT_RTOL, OPT_ATOL, OPT_MAX_STEP, OPT_FIXED_STEP, OPT_T_END, OPT_ZENO_FACTOR, OPT_MAX_EVENTS, OPT_CONTACT_STOP, OPT_SAMPLES, OPT_MAX_STEPS, OPT_COUNT };
+enum { I_STATUS, I_REASON, I_WALL, I_WHY, I_SUB, I_FUNCTION, I_MODE, I_D0, I_D1, I_D2, I_D3, I_STEPS, I_REJECTED_STEPS, I_RHS_CALLS, I_CONSTRAINT_DRIFT, I_ENERGY_DRIFT, I_EVENTS, I_IMPACTS, I_GRAZING, I_CONTACTS, I_RELEASES, I_LAST_T, I_IMPACT_CONDITION, I_COUNT };
 
 static const int moving[NW] = { 0 };
 static const int locked[NW] = { 1 };
@@ -109,7 +109,7 @@ typedef struct {
     /* walls grazed and not yet left (hybrid._Run.grazing) */
     int grazing[NW > 0 ? NW : 1];
     int banded[NW > 0 ? NW : 1]; /* released, not yet left beyond tol_psi */
-    long steps, rejected, nfev, events, counts[4];
+    long steps, rejected, nfev, events, counts[K_COUNT];
     /* stop */
     int status, reason, stop_wall, why, sub, failed_function;
     double d[4];
@@ -1126,23 +1126,22 @@ static int run(sim_t *s)
 
 /* ---- the API (ctypes) ---- */
 
-/* options: rtol, atol, max_step, fixed_step (0: adaptive), t_end, zeno_factor, max_events,
-   contact_stop, samples, max_steps */
+/* options: the OPT_ entries (symmech.simulate.protocol.OPTIONS; fixed_step 0: adaptive) */
 void *symmech_bouncing_ball_sim_new(int method, const double *options, const double *P, int record)
 {
     sim_t *s = calloc(1, sizeof(sim_t));
     if (!s) return NULL;
     s->tab = TABLEAUX[method];
-    s->rtol = options[0];
-    s->atol = options[1];
-    s->max_step = options[2];
-    s->fixed_step = options[3];
-    s->t_end = options[4];
-    s->zeno_factor = options[5];
-    s->max_events = (long)options[6];
-    s->contact_stop = (int)options[7];
-    s->samples = (int)options[8];
-    s->max_steps = (long)options[9];
+    s->rtol = options[OPT_RTOL];
+    s->atol = options[OPT_ATOL];
+    s->max_step = options[OPT_MAX_STEP];
+    s->fixed_step = options[OPT_FIXED_STEP];
+    s->t_end = options[OPT_T_END];
+    s->zeno_factor = options[OPT_ZENO_FACTOR];
+    s->max_events = (long)options[OPT_MAX_EVENTS];
+    s->contact_stop = (int)options[OPT_CONTACT_STOP];
+    s->samples = (int)options[OPT_SAMPLES];
+    s->max_steps = (long)options[OPT_MAX_STEPS];
     s->record = record;
     s->P = P;
     size_t total = (size_t)NA * (KROWS + 7 + 13) + 3 * NF;
@@ -1188,7 +1187,8 @@ void symmech_bouncing_ball_sim_begin(void *p, double t0, const double *y0)
     s->status = ST_RUNNING;
     s->reason = R_NONE;
     s->stop_wall = s->why = s->sub = s->failed_function = -1;
-    for (int i = 0; i < 4; ++i) { s->d[i] = 0.0; s->counts[i] = 0; }
+    for (int i = 0; i < 4; ++i) s->d[i] = 0.0;
+    for (int i = 0; i < K_COUNT; ++i) s->counts[i] = 0;
     for (int w = 0; w < NW; ++w) s->nhist[w] = 0;
     s->energy_jumps = s->energy_drift = s->drift = 0.0;
     s->condition = 1.0;
@@ -1220,30 +1220,28 @@ int symmech_bouncing_ball_sim_run(void *p, double *rec, long rec_cap, double *se
     return paused;
 }
 
-/* status, reason, wall, why, sub, function, mode, d[4], steps, rejected, nfev, drift,
-   energy drift, events, impacts, grazing, contacts, releases, and the last sample of the
-   output (t, then after the condition number, y[NY]) */
+/* the I_ entries (symmech.simulate.protocol.INFO), then the last sample's state y[NY] */
 void symmech_bouncing_ball_sim_info(const void *p, double *out)
 {
     const sim_t *s = p;
-    out[0] = s->status;
-    out[1] = s->reason;
-    out[2] = s->stop_wall;
-    out[3] = s->why;
-    out[4] = s->sub;
-    out[5] = s->failed_function;
-    out[6] = s->mode;
-    for (int i = 0; i < 4; ++i) out[7 + i] = s->d[i];
-    out[11] = (double)s->steps;
-    out[12] = (double)s->rejected;
-    out[13] = (double)s->nfev;
-    out[14] = s->drift;
-    out[15] = s->energy_drift;
-    out[16] = (double)s->events;
-    for (int i = 0; i < 4; ++i) out[17 + i] = (double)s->counts[i];
-    out[21] = s->last_t;
-    out[22] = s->condition;
-    for (int i = 0; i < NY; ++i) out[23 + i] = s->last_y[i];
+    out[I_STATUS] = s->status;
+    out[I_REASON] = s->reason;
+    out[I_WALL] = s->stop_wall;
+    out[I_WHY] = s->why;
+    out[I_SUB] = s->sub;
+    out[I_FUNCTION] = s->failed_function;
+    out[I_MODE] = s->mode;
+    for (int i = 0; i < 4; ++i) out[I_D0 + i] = s->d[i];
+    out[I_STEPS] = (double)s->steps;
+    out[I_REJECTED_STEPS] = (double)s->rejected;
+    out[I_RHS_CALLS] = (double)s->nfev;
+    out[I_CONSTRAINT_DRIFT] = s->drift;
+    out[I_ENERGY_DRIFT] = s->energy_drift;
+    out[I_EVENTS] = (double)s->events;
+    for (int i = 0; i < K_COUNT; ++i) out[I_IMPACTS + i] = (double)s->counts[i];
+    out[I_LAST_T] = s->last_t;
+    out[I_IMPACT_CONDITION] = s->condition;
+    for (int i = 0; i < NY; ++i) out[I_COUNT + i] = s->last_y[i];
 }
 
 /* N runs from the rows of Y0 (N x NY); info rows of 25 doubles per run.
