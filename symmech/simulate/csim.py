@@ -36,7 +36,7 @@ from symmech.codegen.backends import environment, templates_used
 from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
 from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
-from symmech.simulate.hybrid import COND_LIMIT, Options
+from symmech.simulate.hybrid import COND_LIMIT, RESTART_FLOOR, Options
 from symmech.simulate.protocol import (
     FUNCTIONS,
     INFO,
@@ -276,6 +276,7 @@ def simulator_source(system: HybridSystem) -> dict[str, str]:
             m=spec.m,
             has_frame=spec.has_frame,
             cond_limit=repr(COND_LIMIT),
+            restart_floor=repr(RESTART_FLOOR),
             enums=c_enums(),
             calls=spec.calls,
             methods=C_METHODS,

@@ -75,6 +75,12 @@ __all__ = ["COND_LIMIT", "MAX_STEPS", "Options", "run"]
 #: Default bound on the accepted steps of one run (:attr:`Options.max_steps`).
 MAX_STEPS = 10_000_000
 
+#: After an event the flow restarts no longer than the step it cut, and never shorter
+#: than this fraction of it (the step-size controller's own smallest factor, HNW I,
+#: II.4): an event a few ulps after a step's start must not shrink the next step to that
+#: sliver.
+RESTART_FLOOR = 0.2
+
 #: Largest condition number of an impact's Gram matrix the loop accepts: the impulse's
 #: relative error is about cond * eps, so 1e-2 / eps keeps it below 1e-2.
 COND_LIMIT = 1e-2 / 2.220446049250313e-16
@@ -384,7 +390,10 @@ class _Run:
                 self.enter_contact(wall, rate, reason="grazing contact with the wall pressing")
             else:
                 self.event("grazing", wall, y, y, rate)
-                self.grazing.add(wall)
+                if abs(rate) <= self.creep_floor(y):  # touching, moving together
+                    self.banded.add(wall)
+                else:
+                    self.grazing.add(wall)
             return
         self.impacts(wall, rate)
 
@@ -422,8 +431,23 @@ class _Run:
                 f"simultaneous impacts at t = {float(self.t)!r} did not resolve in"
                 f" {100 * self.walls} applications of the sequential rule",
             )
+        self.band_touching()
         for w in dict.fromkeys(hit):
             self.check_accumulation(w)
+
+    def band_touching(self) -> None:
+        """Walls at contact (``|psi| <= tol_psi``) whose normal rate is below the rounding
+        level (``creep_floor``): bodies that touch and move together, as the balls of a
+        cradle left at rest by an impact.  Their gap hovers at 0 +- a few ulps of q, which
+        is no event: they are searched through ``psi + tol_psi`` until they part."""
+        y = self.y
+        floor = self.creep_floor(y)
+        for w in range(self.walls):
+            if w == self.mode or abs(self.f.psi(w, self.t, self.q(y))) > self.tol_psi:
+                continue
+            if abs(self.f.normal_rate(w, self.t, y)) <= floor:
+                self.banded.add(w)
+                self.grazing.discard(w)
 
     def approaching(self) -> tuple[int, float] | None:
         """The wall at contact (psi <= tol_psi) with the most negative normal rate below
@@ -520,6 +544,7 @@ class _Run:
                 rate = self.f.normal_rate(w, self.t, self.y)
                 if abs(rate) <= self.tol_v(self.y) and self.needs_push(w, self.y):
                     self.enter_contact(w, rate, reason="initial state at rest on the wall")
+        self.band_touching()
         if len(self.ts) and not np.array_equal(self.ys[-1], self.y):
             self.record(self.t, self.y)
 
@@ -563,7 +588,7 @@ class _Run:
                 else:
                     self.at_wall(wall)
                 self.record(self.t, self.y)
-                self.flow.limit_step(t_e - seg.t0)
+                self.flow.limit_step(max(t_e - seg.t0, RESTART_FLOOR * (seg.t1 - seg.t0)))
                 self.flow.start(self.t, self.y, t_end)
         except _Stop as stop:
             return stop.status, stop.message, stop.accumulation

@@ -37,6 +37,8 @@
 #define HAS_FRAME 0
 /* largest condition number of an impact's Gram matrix (symmech.simulate.hybrid.COND_LIMIT) */
 #define COND_LIMIT 45035996273704.96
+/* the shortest restart after an event, as a fraction of the step cut (hybrid.RESTART_FLOOR) */
+#define RESTART_FLOOR 0.2
 #define EPS 2.220446049250313e-16
 #define KROWS 16
 
@@ -969,6 +971,20 @@ static int check_accumulation(sim_t *s, int w)
     return enter_contact(s, w, rebound, 1, estimate);
 }
 
+/* walls at contact whose normal rate is below the rounding level: bodies touching and
+   moving together, searched through psi + tol_psi until they part (hybrid._Run.band_touching) */
+static void band_touching(sim_t *s)
+{
+    double level = creep_floor(s->y);
+    for (int w = 0; w < NW; ++w) {
+        if (w == s->mode || fabs(psi(s, w, s->t, s->y)) > s->tol_psi) continue;
+        if (fabs(normal_rate(s, w, s->t, s->y)) <= level) {
+            s->banded[w] = 1;
+            s->grazing[w] = 0;
+        }
+    }
+}
+
 static int impacts(sim_t *s, int first, double r)
 {
     int hit[NW], nhit = 0, w = first, limit = 100 * (NW > 1 ? NW : 1);
@@ -1005,6 +1021,8 @@ static int impacts(sim_t *s, int first, double r)
         if (s->status != ST_RUNNING) return 1;
         if (w < 0) break;
     }
+    band_touching(s);
+    if (s->status != ST_RUNNING) return 1;
     for (int j = 0; j < nhit; ++j)
         if (check_accumulation(s, hit[j])) return 1;
     return s->status != ST_RUNNING;
@@ -1023,7 +1041,8 @@ static int at_wall(sim_t *s, int w)
         if (force > 0 || (r < -creep_floor(s->y) && force >= 0))
             return enter_contact(s, w, r, 0, s->t);
         if (event(s, K_GRAZING, w, s->y, s->y, r)) return 1;
-        s->grazing[w] = 1;
+        if (fabs(r) <= creep_floor(s->y)) s->banded[w] = 1; /* touching, moving together */
+        else s->grazing[w] = 1;
         return 0;
     }
     return impacts(s, w, r);
@@ -1043,6 +1062,7 @@ static int start(sim_t *s)
                 if (enter_contact(s, w, r, 2, s->t)) return 1;
         }
     }
+    band_touching(s);
     if (s->status != ST_RUNNING) return 1;
     if (memcmp(y, s->y, sizeof y) != 0) record(s);
     return 0;
@@ -1115,8 +1135,11 @@ static int run(sim_t *s)
         }
         record(s);
         /* restart no longer than the step just cut (RKFlow.limit_step): the next event
-           is then located on a step of the motion's own scale */
-        if (s->have_h && te > s->st0 && s->h > te - s->st0) s->h = te - s->st0;
+           is then located on a step of the motion's own scale; never shorter than
+           RESTART_FLOOR of it (an event a few ulps after the step's start) */
+        double cut = te - s->st0, least = RESTART_FLOOR * (s->st1 - s->st0);
+        if (cut < least) cut = least;
+        if (s->have_h && cut > 0 && s->h > cut) s->h = cut;
         if (flow_start(s)) return 0;
     }
     s->d[0] = s->t_end;
