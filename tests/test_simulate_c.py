@@ -479,8 +479,8 @@ int main(void)
     double P[] = { PARAMS }, y0[] = { Y0 }, info[64], Y[2 * NYV];
     long cap = 64, ecap = 512, counts[3], total = 0;
     for (int method = 0; method < 4; ++method) {
-        double opts[] = { 1e-8, 1e-10, TEND / 50, method == 3 ? TEND / 2000 : 0.0, TEND, 100.0,
-                          400.0, 0.0, 8.0, 1e7 };
+        double opts[] = { OPTS };
+        opts[FIXEDI] = method == 3 ? TEND / 2000 : 0.0;
         void *s = PREFIXnew(method, opts, P, 1);
         double *rec = malloc(sizeof(double) * cap * (NYV + 1));
         double *seg = malloc(sizeof(double) * cap * (4 + 8 * NYV));
@@ -490,11 +490,11 @@ int main(void)
         while (PREFIXrun(s, rec, cap, seg, cap, ev, evi, ecap, counts)) total += counts[0];
         total += counts[0];
         PREFIXinfo(s, info);
-        printf("method %d status %g events %g\n", method, info[0], info[16]);
+        printf("method %d status %g events %g\n", method, info[0], info[EVENTSI]);
         PREFIXfree(s);
         free(rec); free(seg); free(ev); free(evi);
         for (int i = 0; i < NYV; ++i) Y[i] = Y[NYV + i] = y0[i];
-        double binfo[2 * (23 + NYV)];
+        double binfo[2 * (INFOHEAD + NYV)];
         if (PREFIXbatch(2, Y, 0.0, method, opts, P, binfo) != 0) return 1;
     }
     printf("records %ld\n", total);
@@ -503,25 +503,44 @@ int main(void)
 """
 
 
+ROD = {"alpha": 1.0, "g": 9.81, "l": 1.0, "m": 1.0}
+
+
+def falling_rod() -> sm.Scene:
+    return sm.load_scene("falling_rod")
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(
     ("make", "y0", "t_end"),
-    [(bouncing_ball, [1.0, 0.0], 3.0), (ellipse_gravity, [0, 1.5, 0.3, 0, 0, 2], 6.0)],
+    [
+        (bouncing_ball, [1.0, 0.0], 3.0),
+        (ellipse_gravity, [0, 1.5, 0.3, 0, 0, 2], 6.0),
+        (falling_rod, [0, 1.0, 0, 0, 0, 0], 3.0),  # simultaneous impacts on two walls
+    ],
 )
 def test_simulator_is_clean_under_address_and_undefined_sanitizers(tmp_path, make, y0, t_end):
     """Every method, pausing output buffers and the batch entry, under ASan and UBSan."""
-    from symmech.simulate.csim import library
+    from symmech.simulate import protocol
+    from symmech.simulate.csim import library, options_vector
+    from symmech.simulate.hybrid import Options
 
     system = system_for(make(), "c")
     lib = library(system)
-    params = BALL if make is bouncing_ball else ELLIPSE
+    params = {bouncing_ball: BALL, ellipse_gravity: ELLIPSE, falling_rod: ROD}[make]
     P = lib.parameters({k: float(v) for k, v in params.items()})
+    loop = Options(t_end=float(t_end), rtol=1e-8, atol=1e-10, max_events=400)
+    opts = options_vector(loop, "dop853", float(t_end) / 50, 0.0)[1]
     driver = (
         _DRIVER.replace("PREFIX", lib.spec.prefix)
         .replace("PARAMS", ", ".join(repr(float(x)) for x in P))
         .replace("Y0", ", ".join(repr(float(x)) for x in y0))
         .replace("NYV", str(len(y0)))
         .replace("TEND", repr(float(t_end)))
+        .replace("OPTS", ", ".join(repr(float(x)) for x in opts))
+        .replace("FIXEDI", str(protocol.OPTIONS.index("fixed_step")))
+        .replace("EVENTSI", str(protocol.INFO.index("events")))
+        .replace("INFOHEAD", str(protocol.INFO_HEAD))
     )
     for name, text in lib.sources.items():
         (tmp_path / name).write_text(text, encoding="utf-8")

@@ -37,6 +37,7 @@ from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
 from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
 from symmech.simulate.hybrid import COND_LIMIT, RESTART_FLOOR, Options
+from symmech.simulate.impulses import MAX_SIMULTANEOUS
 from symmech.simulate.protocol import (
     FUNCTIONS,
     INFO,
@@ -83,6 +84,7 @@ class SimulatorSpec:
     energy_conserved: int
     moving: tuple[int, ...]
     locked: tuple[int, ...]
+    simultaneous: tuple[int, ...]
     normal_index: int
     wall_names: tuple[str, ...]
     m: int
@@ -197,6 +199,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         energy_conserved=int(fns.energy_conserved),
         moving=moving,
         locked=locked,
+        simultaneous=tuple(int(x) for x in fns.simultaneous),
         normal_index=system.normal_index(0) if walls else 0,
         wall_names=fns.wall_names,
         m=scene.constraint_matrix.rows,
@@ -277,6 +280,8 @@ def simulator_source(system: HybridSystem) -> dict[str, str]:
             has_frame=spec.has_frame,
             cond_limit=repr(COND_LIMIT),
             restart_floor=repr(RESTART_FLOOR),
+            max_simultaneous=MAX_SIMULTANEOUS,
+            simultaneous=spec.simultaneous,
             enums=c_enums(),
             calls=spec.calls,
             methods=C_METHODS,
@@ -378,6 +383,7 @@ def options_vector(
         "contact_stop": float(opts.contact == "stop"),
         "samples": float(opts.samples),
         "max_steps": float(opts.max_steps),
+        "sequential": float(opts.impact_law == "sequential"),
     }
     vec = np.array([entries[k] for k in OPTIONS], dtype=np.float64)
     return C_METHODS.index(method), vec

@@ -68,6 +68,7 @@ import numpy as np
 from symmech.codegen.module import NumericalError
 from symmech.simulate.events import find_root
 from symmech.simulate.flow import FlowFailure, Segment
+from symmech.simulate.impulses import MAX_SIMULTANEOUS, active_set_solution
 from symmech.simulate.result import Event, SimulationResult
 
 __all__ = ["COND_LIMIT", "MAX_STEPS", "Options", "run"]
@@ -98,6 +99,7 @@ class Options:
     samples: int = 8
     zeno_factor: float = 100.0
     max_steps: int = MAX_STEPS
+    impact_law: str = "simultaneous"
 
 
 class Flow(Protocol):
@@ -177,10 +179,20 @@ class _Run:
         self.ts.append(t)
         self.ys.append(self.f.array(y))
 
-    def event(self, kind: str, wall: int, y_minus: np.ndarray, y_plus: np.ndarray, rate: float):
+    def event(
+        self,
+        kind: str,
+        wall: int,
+        y_minus: np.ndarray,
+        y_plus: np.ndarray,
+        rate: float,
+        count_energy: bool = True,
+    ) -> None:
+        """Record an event; ``count_energy=False`` for the second and later walls of a
+        simultaneous impact (the first carries the set's energy change)."""
         q = self.q(y_minus)
         e0 = self.f.energy(self.t, q, self.v(y_minus))
-        e1 = self.f.energy(self.t, self.q(y_plus), self.v(y_plus))
+        e1 = self.f.energy(self.t, self.q(y_plus), self.v(y_plus)) if count_energy else e0
         self.energy_jumps += e1 - e0
         self.events.append(
             Event(
@@ -398,29 +410,22 @@ class _Run:
         self.impacts(wall, rate)
 
     def impacts(self, first: int, rate: float) -> None:
-        """Impact at ``first``, then the sequential rule for walls reached at once."""
+        """Impact at ``first`` and every wall closed and approaching with it, resolved
+        together by the generalized Newton law (:mod:`.impulses`; with
+        ``impact_law="sequential"``, or a set that holds a wall without a Newton
+        direction, one wall at a time, the most negative rate first); then, in cascade,
+        the walls that approach as a result."""
         hit: list[int] = []
         wall, r = first, rate
         for _ in range(100 * max(self.walls, 1)):
-            y = self.y
-            q, v = self.q(y), self.v(y)
-            cond = self.f.impact_condition(wall, self.t, q)
-            self.condition = max(self.condition, cond)
-            if cond > COND_LIMIT:
-                raise _Stop(
-                    "failed",
-                    f"wall {self.names[wall]!r} is nearly dependent on the constraints at"
-                    f" t = {float(self.t)!r}: the impact's Gram matrix has condition number"
-                    f" {cond:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
-                )
-            v_plus = self.f.impact(wall, self.t, q, v)
-            y_plus = np.concatenate([q, v_plus])
-            if self.mode is not None:  # keep the active contact
-                y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
-            self.event("impact", wall, y, y_plus, r)
-            self.y = y_plus
-            self.history[wall].append(self.t)
-            hit.append(wall)
+            group = self.simultaneous_group()
+            struck = self.impact_together(group) if group else None
+            if struck is None:
+                struck = [wall]
+                self.impact_alone(wall, r)
+            for w in struck:
+                self.history[w].append(self.t)
+                hit.append(w)
             nxt = self.approaching()
             if nxt is None:
                 break
@@ -429,11 +434,78 @@ class _Run:
             raise _Stop(
                 "failed",
                 f"simultaneous impacts at t = {float(self.t)!r} did not resolve in"
-                f" {100 * self.walls} applications of the sequential rule",
+                f" {100 * self.walls} rounds of the impact law",
             )
         self.band_touching()
         for w in dict.fromkeys(hit):
             self.check_accumulation(w)
+
+    def check_condition(self, wall: int, q: np.ndarray) -> None:
+        """Stop the run when the impact's Gram matrix is ill-conditioned (COND_LIMIT)."""
+        cond = self.f.impact_condition(wall, self.t, q)
+        self.condition = max(self.condition, cond)
+        if cond > COND_LIMIT:
+            raise _Stop(
+                "failed",
+                f"wall {self.names[wall]!r} is nearly dependent on the constraints at"
+                f" t = {float(self.t)!r}: the impact's Gram matrix has condition number"
+                f" {cond:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
+            )
+
+    def impact_alone(self, wall: int, r: float) -> None:
+        """The scene's closed-form impact map of ``wall`` alone."""
+        y = self.y
+        q, v = self.q(y), self.v(y)
+        self.check_condition(wall, q)
+        v_plus = self.f.impact(wall, self.t, q, v)
+        y_plus = np.concatenate([q, v_plus])
+        if self.mode is not None:  # keep the active contact
+            y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
+        self.event("impact", wall, y, y_plus, r)
+        self.y = y_plus
+
+    def simultaneous_group(self) -> list[tuple[int, float]]:
+        """The walls closed and approaching now (:meth:`approaching_walls`) when the law
+        resolves them together: two or more, each with a Newton direction, in free
+        flight, at most MAX_SIMULTANEOUS; else empty (one wall at a time)."""
+        if self.o.impact_law != "simultaneous" or self.mode is not None:
+            return []
+        group = self.approaching_walls()
+        if not 2 <= len(group) <= MAX_SIMULTANEOUS:
+            return []
+        if not all(self.f.simultaneous[w] for w, _ in group):
+            return []
+        return group
+
+    def impact_together(self, group: list[tuple[int, float]]) -> list[int] | None:
+        """Resolve the walls of ``group`` together (:mod:`.impulses`); the walls that took
+        an impulse, or None when no active set is feasible (then one wall at a time)."""
+        y = self.y
+        q, v = self.q(y), self.v(y)
+        walls = [w for w, _ in group]
+        for w in walls:
+            self.check_condition(w, q)
+        x, g = [], []
+        for w in walls:
+            d = self.f.impact(w, self.t, q, v) - v
+            gw = self.f.rate_change(w, self.t, q, d)
+            g.append(gw)
+            x.append(d / gw)
+        K = [[self.f.rate_change(j, self.t, q, xi) for xi in x] for j in walls]
+        m = active_set_solution(K, g, self.tol_v(y))
+        if m is None or all(mi == 0 for mi in m):
+            return None
+        v_plus = v.copy()
+        for mi, xi in zip(m, x, strict=True):
+            if mi != 0:
+                v_plus = v_plus + mi * xi
+        y_plus = np.concatenate([q, v_plus])
+        struck = [w for w, mi in zip(walls, m, strict=True) if mi != 0]
+        rates = dict(group)
+        for k, w in enumerate(struck):  # the energy change is carried by the first
+            self.event("impact", w, y, y_plus, rates[w], count_energy=k == 0)
+        self.y = y_plus
+        return struck
 
     def band_touching(self) -> None:
         """Walls at contact (``|psi| <= tol_psi``) whose normal rate is below the rounding
@@ -449,17 +521,26 @@ class _Run:
                 self.banded.add(w)
                 self.grazing.discard(w)
 
-    def approaching(self) -> tuple[int, float] | None:
-        """The wall at contact (psi <= tol_psi) with the most negative normal rate below
-        -tol_v, or None."""
+    def approaching_walls(self) -> list[tuple[int, float]]:
+        """The walls at contact (psi <= tol_psi) whose normal rate is below -tol_v, with
+        their rates, in the order of the walls."""
         y = self.y
         tol_v = self.tol_v(y)
-        best: tuple[int, float] | None = None
+        out = []
         for w in range(self.walls):
             if w == self.mode or self.f.psi(w, self.t, self.q(y)) > self.tol_psi:
                 continue
             r = self.f.normal_rate(w, self.t, y)
-            if r < -tol_v and (best is None or r < best[1]):
+            if r < -tol_v:
+                out.append((w, r))
+        return out
+
+    def approaching(self) -> tuple[int, float] | None:
+        """The wall at contact (psi <= tol_psi) with the most negative normal rate below
+        -tol_v (ties: the lowest index), or None."""
+        best: tuple[int, float] | None = None
+        for w, r in self.approaching_walls():
+            if best is None or r < best[1]:
                 best = (w, r)
         return best
 

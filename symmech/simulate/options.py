@@ -31,10 +31,14 @@ from symmech.simulate.arguments import MAX_EVENT_SAMPLES, count, positive
 from symmech.simulate.hybrid import MAX_STEPS, Options
 from symmech.simulate.system import SimulationError, real_scalar
 
-__all__ = ["CONTACT_MODES", "RunOptions"]
+__all__ = ["CONTACT_MODES", "IMPACT_LAWS", "RunOptions"]
 
 #: What to do at an accumulation of impacts.
 CONTACT_MODES = ("persistent", "stop")
+
+#: How walls closed and approaching at the same instant are resolved: together by the
+#: generalized Newton law (:mod:`symmech.simulate.impulses`), or one at a time.
+IMPACT_LAWS = ("simultaneous", "sequential")
 
 EPS = float(np.finfo(float).eps)
 
@@ -48,7 +52,10 @@ class RunOptions:
     the whole span); ``max_events``, ``max_steps``: bounds on a run's events and accepted
     steps; ``contact``: ``"persistent"`` (an accumulation of impacts becomes a resting
     contact) or ``"stop"``; ``event_samples``: samples of each step's dense output
-    searched for events; ``t0``: the start time.
+    searched for events; ``t0``: the start time; ``impact_law``: ``"simultaneous"`` (walls
+    closed and approaching at one instant resolved together by the generalized Newton
+    law, then in cascade) or ``"sequential"`` (one wall at a time, the most negative
+    normal rate first).
     """
 
     method: str = "dop853"
@@ -60,10 +67,15 @@ class RunOptions:
     contact: str = "persistent"
     event_samples: int = 8
     t0: float = 0.0
+    impact_law: str = "simultaneous"
 
     def __post_init__(self) -> None:
         if not isinstance(self.method, str):
             raise SimulationError(f"method must be a name, got {self.method!r}")
+        if self.impact_law not in IMPACT_LAWS:
+            raise SimulationError(
+                f"impact_law must be one of {IMPACT_LAWS}, got {self.impact_law!r}"
+            )
         if self.contact not in CONTACT_MODES:
             raise SimulationError(f"contact must be one of {CONTACT_MODES}, got {self.contact!r}")
         t0 = real_scalar(self.t0, "t0")
@@ -131,4 +143,5 @@ class RunOptions:
             contact=self.contact,
             samples=self.event_samples,
             max_steps=self.max_steps,
+            impact_law=self.impact_law,
         )

@@ -69,6 +69,7 @@ OPTIONS = (
     "contact_stop",
     "samples",
     "max_steps",
+    "sequential",
 )
 
 #: The head of a run's info row (written by the loop's ``info``); the final state

@@ -37,6 +37,7 @@ from symmech.simulate.system import (
     check_parameters,
     contact_rows,
     contact_scene,
+    simultaneous_walls,
 )
 
 __all__ = ["MpFlow", "MpFunctions", "as_float", "reference_run"]
@@ -58,6 +59,7 @@ class MpFunctions:
         self.constrained = scene.is_constrained
         self.moving = tuple(TIME in w.psi.free_symbols for w in scene.walls)
         self.energy_conserved = scene.conservative
+        self.simultaneous = simultaneous_walls(scene)
         self.mode: int | None = None
         self.eps = mpmath.eps
         self._values = {
@@ -132,6 +134,11 @@ class MpFunctions:
 
     def normal_rate(self, wall: int, t: Any, y: np.ndarray) -> Any:
         return self.rate(wall, t, y, self.rhs(None, t, y))
+
+    def rate_change(self, wall: int, t: Any, q: np.ndarray, dv: np.ndarray) -> Any:
+        """As :meth:`.system.Functions.rate_change`, in mpmath."""
+        qdot = self._eval(("qdot",), lambda: sp.Matrix(self.scene.kinematics()), t, q, dv)
+        return mpmath.fdot(list(self.gradient(wall, t, q)), list(qdot))
 
     def flow_rates(self, t: Any, y: np.ndarray, ydot: np.ndarray) -> np.ndarray:
         return _mp_array([self.rate(w, t, y, ydot) for w in range(self.walls)])

@@ -93,6 +93,12 @@ def contact_scene(scene: Scene, wall: int) -> Scene | None:
     return scene.replace(constraints=rows, walls=(), name=f"{scene.name}_contact_{wall}")
 
 
+def simultaneous_walls(scene: Scene) -> tuple[bool, ...]:
+    """Per wall: its impact map has a Newton direction (the Newton law without
+    impulsive constraints), so it can take part in a simultaneous impact."""
+    return tuple(w.law == "newton" and w.impulsive_matrix.rows == 0 for w in scene.walls)
+
+
 def real_values(value: object, what: str) -> np.ndarray:
     """``value`` as float64 by the rule of the generated code's arguments
     (:func:`symmech.codegen.runtime_checks.real_array`: real numbers of any NumPy or Python
@@ -375,6 +381,9 @@ class Functions:
                 " give their expressions with definitions={f: expression} (command line:"
                 " --define f=EXPR)"
             )
+        #: Per wall: its impact has a Newton direction (law "newton", no impulsive
+        #: constraints), so it can be resolved with others at once (:mod:`.impulses`).
+        self.simultaneous = simultaneous_walls(system.scene)
         #: The mode the flow integrates (None: free flight; a wall's index: in contact).
         self.mode: int | None = None
         self._p: dict[int | None, np.ndarray | None] = {}
@@ -464,6 +473,15 @@ class Functions:
     def normal_rate(self, wall: int, t: float, y: np.ndarray) -> float:
         """d psi/dt at a state (q_dot from the kinematics of the free flow)."""
         return self.rate(wall, t, y, self.rhs(None, t, y))
+
+    def rate_change(self, wall: int, t: float, q: np.ndarray, dv: np.ndarray) -> float:
+        """``dpsi S dv``: the change of the wall's normal rate for a velocity change
+        ``dv`` (``S dv`` the q-part of the free flow at velocity ``dv``: the kinematics)."""
+        if self.system.scene.frame is None:
+            qdot = dv
+        else:
+            qdot = self.rhs(None, t, np.concatenate([q, dv]))[: self.n]
+        return float(np.dot(self.gradient(wall, t, q), qdot))
 
     def gradient(self, wall: int, t: float, q: np.ndarray) -> np.ndarray:
         """d psi/d q of ``wall`` (coordinates)."""

@@ -104,7 +104,9 @@ def run_local(
         fill()
         while pending:
             finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in finished:
+            # in chunk order: a failed chunk stops the sweep before any later chunk that
+            # finished beside it is stored, whatever the threads' timing
+            for fut in sorted(finished, key=pending.__getitem__):
                 sink(pending.pop(fut), fut.result())
             fill()
 

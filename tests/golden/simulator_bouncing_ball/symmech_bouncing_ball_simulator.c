@@ -39,6 +39,8 @@
 #define COND_LIMIT 45035996273704.96
 /* the shortest restart after an event, as a fraction of the step cut (hybrid.RESTART_FLOOR) */
 #define RESTART_FLOOR 0.2
+/* the largest set of walls resolved together (symmech.simulate.impulses.MAX_SIMULTANEOUS) */
+#define MAX_SIM 8
 #define EPS 2.220446049250313e-16
 #define KROWS 16
 
@@ -48,11 +50,13 @@ enum { ST_RUNNING, ST_FINISHED, ST_ZENO, ST_MAX_EVENTS, ST_FAILED, ST_MAX_STEPS,
 enum { R_NONE, R_END, R_MAX_EVENTS, R_SEQUENTIAL, R_ACCUMULATION, R_REST, R_RHS_NONFINITE, R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION, R_MAX_STEPS, R_COUNT };
 enum { K_IMPACT, K_GRAZING, K_CONTACT, K_RELEASE, K_COUNT };
 enum { F_PSI, F_DPSI, F_PSI_T, F_IMPACT, F_ENERGY, F_PROJECT, F_RESIDUAL, F_FORCE, F_COUNT };
-enum { OPT_RTOL, OPT_ATOL, OPT_MAX_STEP, OPT_FIXED_STEP, OPT_T_END, OPT_ZENO_FACTOR, OPT_MAX_EVENTS, OPT_CONTACT_STOP, OPT_SAMPLES, OPT_MAX_STEPS, OPT_COUNT };
+enum { OPT_RTOL, OPT_ATOL, OPT_MAX_STEP, OPT_FIXED_STEP, OPT_T_END, OPT_ZENO_FACTOR, OPT_MAX_EVENTS, OPT_CONTACT_STOP, OPT_SAMPLES, OPT_MAX_STEPS, OPT_SEQUENTIAL, OPT_COUNT };
 enum { I_STATUS, I_REASON, I_WALL, I_WHY, I_SUB, I_FUNCTION, I_MODE, I_D0, I_D1, I_D2, I_D3, I_STEPS, I_REJECTED_STEPS, I_RHS_CALLS, I_CONSTRAINT_DRIFT, I_ENERGY_DRIFT, I_EVENTS, I_IMPACTS, I_GRAZING, I_CONTACTS, I_RELEASES, I_LAST_T, I_IMPACT_CONDITION, I_COUNT };
 
 static const int moving[NW] = { 0 };
 static const int locked[NW] = { 1 };
+/* the walls with a Newton direction (symmech.simulate.system.simultaneous_walls) */
+static const int simultaneous[NW] = { 1 };
 
 /* ---- Butcher tableaux (symmech.simulate.steppers.c_tableau, exact doubles) ---- */
 static const double m_dop853_c[12] = { 0.0, 0.05260015195876773, 0.0789002279381516, 0.1183503419072274, 0.2816496580927726, 0.3333333333333333, 0.25, 0.3076923076923077, 0.6512820512820513, 0.6, 0.8571428571428571, 1.0 };
@@ -94,7 +98,7 @@ typedef struct {
     tableau_t tab;
     double rtol, atol, max_step, fixed_step, t_end, zeno_factor;
     long max_events, max_steps;
-    int contact_stop, samples, record;
+    int contact_stop, samples, record, sequential;
     const double *P;
     /* work arrays (one allocation) */
     double *mem;
@@ -623,9 +627,13 @@ static double creep_floor(const double *y)
     return 100 * EPS * speed(y);
 }
 
-static int event(sim_t *s, int kind, int wall, const double *ym, const double *yp, double r)
+/* record an event; count_energy 0 for the second and later walls of a simultaneous
+   impact (the first carries the set's energy change: hybrid._Run.event) */
+static int event_counted(sim_t *s, int kind, int wall, const double *ym, const double *yp,
+                         double r, int count_energy)
 {
-    double e0 = energy(s, s->t, ym, ym + NQ), e1 = energy(s, s->t, yp, yp + NQ);
+    double e0 = energy(s, s->t, ym, ym + NQ);
+    double e1 = count_energy ? energy(s, s->t, yp, yp + NQ) : e0;
     s->energy_jumps += e1 - e0;
     if (s->record) {
         double *e = s->ev + s->nev * (3 + 3 * NQ);
@@ -648,6 +656,11 @@ static int event(sim_t *s, int kind, int wall, const double *ym, const double *y
         return stop(s, ST_MAX_EVENTS, R_MAX_EVENTS);
     }
     return 0;
+}
+
+static int event(sim_t *s, int kind, int wall, const double *ym, const double *yp, double r)
+{
+    return event_counted(s, kind, wall, ym, yp, r, 1);
 }
 
 /* second derivative of psi along the free flow at a moving wall (forward difference) */
@@ -985,38 +998,219 @@ static void band_touching(sim_t *s)
     }
 }
 
+/* stop the run when the impact's Gram matrix is ill-conditioned (hybrid._Run.check_condition) */
+static int check_condition(sim_t *s, int w)
+{
+    double cond = impact_condition(s, w, s->y);
+    s->condition = cond > s->condition ? cond : s->condition;
+    if (cond > COND_LIMIT) {
+        s->stop_wall = w;
+        s->d[0] = s->t;
+        s->d[1] = cond;
+        return stop(s, ST_FAILED, R_CONDITION);
+    }
+    return 0;
+}
+
+/* the scene's impact map of wall w alone (hybrid._Run.impact_alone) */
+static int impact_alone(sim_t *s, int w, double r)
+{
+    double yp[NY];
+    if (check_condition(s, w)) return 1;
+    memcpy(yp, s->y, sizeof yp);
+    if (call_wall(s, F_IMPACT, w, s->t, s->y, s->y + NQ, yp + NQ) != 0) {
+        fail_call(s, F_IMPACT);
+        return 1;
+    }
+    if (s->mode >= 0) project(s, s->mode, s->t, yp, yp + NQ, yp + NQ);
+    if (event(s, K_IMPACT, w, s->y, yp, r)) return 1;
+    memcpy(s->y, yp, sizeof yp);
+    return 0;
+}
+
+/* dpsi S dv: the change of wall w's normal rate for a velocity change dv
+   (symmech.simulate.system.Functions.rate_change) */
+static double rate_change(sim_t *s, int w, const double *q, const double *dv)
+{
+    double g[NQ], qdot[NQ], acc = 0.0;
+    if (call_wall(s, F_DPSI, w, s->t, q, q, g) != 0) { fail_call(s, F_DPSI); return NAN; }
+#if HAS_FRAME
+    double y[NY];
+    memcpy(y, q, NQ * sizeof(double));
+    memcpy(y + NQ, dv, NQ * sizeof(double));
+    rhs(s, -1, s->t, y, s->w1);
+    memcpy(qdot, s->w1, NQ * sizeof(double));
+#else
+    memcpy(qdot, dv, NQ * sizeof(double));
+#endif
+    for (int i = 0; i < NQ; ++i) acc += g[i] * qdot[i];
+    return acc;
+}
+
+/* x with A x = b (k x k, row stride MAX_SIM), Gaussian elimination with partial pivoting;
+   0, or -1 for a zero pivot (symmech.simulate.impulses.solve_small) */
+static int solve_small(int k, const double *A, const double *b, double *x)
+{
+    double M[MAX_SIM][MAX_SIM + 1];
+    for (int i = 0; i < k; ++i) {
+        for (int j = 0; j < k; ++j) M[i][j] = A[i * MAX_SIM + j];
+        M[i][k] = b[i];
+    }
+    for (int c = 0; c < k; ++c) {
+        int piv = c;
+        for (int i = c + 1; i < k; ++i)
+            if (fabs(M[i][c]) > fabs(M[piv][c])) piv = i;
+        if (M[piv][c] == 0.0) return -1;
+        if (piv != c)
+            for (int j = 0; j <= k; ++j) { double t = M[c][j]; M[c][j] = M[piv][j]; M[piv][j] = t; }
+        for (int i = c + 1; i < k; ++i) {
+            double f = M[i][c] / M[c][c];
+            for (int j = c; j <= k; ++j) M[i][j] = M[i][j] - f * M[c][j];
+        }
+    }
+    for (int c = k - 1; c >= 0; --c) {
+        double acc = M[c][k];
+        for (int j = c + 1; j < k; ++j) acc = acc - M[c][j] * x[j];
+        x[c] = acc / M[c][c];
+    }
+    return 0;
+}
+
+static int popcount(unsigned v)
+{
+    int n = 0;
+    for (; v; v >>= 1) n += (int)(v & 1u);
+    return n;
+}
+
+/* the LCP w = K m - g >= 0, m >= 0, w^T m = 0 by active sets, by size then by bit mask
+   (symmech.simulate.impulses.active_set_solution); 0 with m, or -1 when none is feasible */
+static int active_set_solution(int k, const double *K, const double *g, double tol, double *m)
+{
+    for (int size = 0; size <= k; ++size) {
+        for (unsigned mask = 0; mask < (1u << k); ++mask) {
+            if (popcount(mask) != size) continue;
+            int act[MAX_SIM], na = 0;
+            double A[MAX_SIM * MAX_SIM], b[MAX_SIM], x[MAX_SIM];
+            for (int i = 0; i < k; ++i)
+                if (mask >> i & 1u) act[na++] = i;
+            for (int i = 0; i < na; ++i) {
+                for (int j = 0; j < na; ++j) A[i * MAX_SIM + j] = K[act[i] * MAX_SIM + act[j]];
+                b[i] = g[act[i]];
+            }
+            if (solve_small(na, A, b, x) != 0) continue;
+            int ok = 1;
+            for (int i = 0; i < na; ++i) ok &= !(x[i] < -tol);
+            if (!ok) continue;
+            for (int i = 0; i < k; ++i) m[i] = 0.0;
+            for (int i = 0; i < na; ++i) m[act[i]] = x[i] > 0 ? x[i] : 0.0;
+            for (int j = 0; j < k && ok; ++j) {
+                if (mask >> j & 1u) continue;
+                double w = -g[j];
+                for (int i = 0; i < na; ++i) w = w + K[j * MAX_SIM + act[i]] * m[act[i]];
+                if (w < -tol) ok = 0;
+            }
+            if (ok) return 0;
+        }
+    }
+    return -1;
+}
+
+/* the walls at contact approaching faster than tol_v, in order (hybrid._Run.approaching_walls) */
+static int approaching_walls(sim_t *s, int *walls, double *rates)
+{
+    double tv = tol_v(s, s->y);
+    int n = 0;
+    for (int w = 0; w < NW; ++w) {
+        if (w == s->mode || psi(s, w, s->t, s->y) > s->tol_psi) continue;
+        double r = normal_rate(s, w, s->t, s->y);
+        if (r < -tv) {
+            walls[n] = w;
+            rates[n] = r;
+            n++;
+        }
+    }
+    return n;
+}
+
+/* resolve the approaching walls together when the law allows it (hybrid._Run.impact_together):
+   1 done (struck[] the walls that took an impulse), 0 not applicable, -1 stopped */
+static int impact_together(sim_t *s, int *struck, int *nstruck)
+{
+    int walls[NW > 0 ? NW : 1], k;
+    double rates[NW > 0 ? NW : 1];
+    *nstruck = 0;
+    if (s->sequential || s->mode >= 0) return 0;
+    k = approaching_walls(s, walls, rates);
+    if (s->status != ST_RUNNING) return -1;
+    if (k < 2 || k > MAX_SIM) return 0;
+    for (int i = 0; i < k; ++i)
+        if (!simultaneous[walls[i]]) return 0;
+    for (int i = 0; i < k; ++i)
+        if (check_condition(s, walls[i])) return -1;
+    const double *q = s->y, *v = s->y + NQ;
+    double X[MAX_SIM][NQ], g[MAX_SIM], K[MAX_SIM * MAX_SIM], m[MAX_SIM], yp[NY];
+    for (int i = 0; i < k; ++i) {
+        double d[NQ];
+        if (call_wall(s, F_IMPACT, walls[i], s->t, s->y, v, d) != 0) {
+            fail_call(s, F_IMPACT);
+            return -1;
+        }
+        for (int j = 0; j < NQ; ++j) d[j] -= v[j];
+        g[i] = rate_change(s, walls[i], q, d);
+        for (int j = 0; j < NQ; ++j) X[i][j] = d[j] / g[i];
+    }
+    for (int j = 0; j < k; ++j)
+        for (int i = 0; i < k; ++i) K[j * MAX_SIM + i] = rate_change(s, walls[j], q, X[i]);
+    if (s->status != ST_RUNNING) return -1;
+    if (active_set_solution(k, K, g, tol_v(s, s->y), m) != 0) return 0;
+    int any = 0;
+    for (int i = 0; i < k; ++i) any |= m[i] != 0.0;
+    if (!any) return 0;
+    memcpy(yp, s->y, sizeof yp);
+    for (int i = 0; i < k; ++i)
+        if (m[i] != 0.0)
+            for (int j = 0; j < NQ; ++j) yp[NQ + j] = yp[NQ + j] + m[i] * X[i][j];
+    for (int i = 0; i < k; ++i) {
+        if (m[i] == 0.0) continue;
+        if (event_counted(s, K_IMPACT, walls[i], s->y, yp, rates[i], *nstruck == 0)) return -1;
+        struck[(*nstruck)++] = walls[i];
+    }
+    memcpy(s->y, yp, sizeof yp);
+    return 1;
+}
+
+static void remember_impact(sim_t *s, int w, int *hit, int *nhit)
+{
+    s->hist[w][0] = s->hist[w][1];
+    s->hist[w][1] = s->hist[w][2];
+    s->hist[w][2] = s->t;
+    s->nhist[w]++;
+    int seen = 0;
+    for (int j = 0; j < *nhit; ++j) seen |= hit[j] == w;
+    if (!seen) hit[(*nhit)++] = w;
+}
+
+/* impact at `first` and the walls closed and approaching with it, together by the
+   generalized Newton law or one at a time; then, in cascade, those approaching as a
+   result (hybrid._Run.impacts) */
 static int impacts(sim_t *s, int first, double r)
 {
     int hit[NW], nhit = 0, w = first, limit = 100 * (NW > 1 ? NW : 1);
-    double yp[NY];
+    int struck[NW], nstruck = 0;
     for (int it = 0;; ++it) {
         if (it == limit) {
             s->d[0] = s->t;
             return stop(s, ST_FAILED, R_SEQUENTIAL);
         }
-        double cond = impact_condition(s, w, s->y);
-        s->condition = cond > s->condition ? cond : s->condition;
-        if (cond > COND_LIMIT) {
-            s->stop_wall = w;
-            s->d[0] = s->t;
-            s->d[1] = cond;
-            return stop(s, ST_FAILED, R_CONDITION);
+        int together = impact_together(s, struck, &nstruck);
+        if (together < 0) return 1;
+        if (together == 0) {
+            if (impact_alone(s, w, r)) return 1;
+            struck[0] = w;
+            nstruck = 1;
         }
-        memcpy(yp, s->y, sizeof yp);
-        if (call_wall(s, F_IMPACT, w, s->t, s->y, s->y + NQ, yp + NQ) != 0) {
-            fail_call(s, F_IMPACT);
-            return 1;
-        }
-        if (s->mode >= 0) project(s, s->mode, s->t, yp, yp + NQ, yp + NQ);
-        if (event(s, K_IMPACT, w, s->y, yp, r)) return 1;
-        memcpy(s->y, yp, sizeof yp);
-        s->hist[w][0] = s->hist[w][1];
-        s->hist[w][1] = s->hist[w][2];
-        s->hist[w][2] = s->t;
-        s->nhist[w]++;
-        int seen = 0;
-        for (int j = 0; j < nhit; ++j) seen |= hit[j] == w;
-        if (!seen) hit[nhit++] = w;
+        for (int j = 0; j < nstruck; ++j) remember_impact(s, struck[j], hit, &nhit);
         w = approaching(s, &r);
         if (s->status != ST_RUNNING) return 1;
         if (w < 0) break;
@@ -1165,6 +1359,7 @@ void *symmech_bouncing_ball_sim_new(int method, const double *options, const dou
     s->contact_stop = (int)options[OPT_CONTACT_STOP];
     s->samples = (int)options[OPT_SAMPLES];
     s->max_steps = (long)options[OPT_MAX_STEPS];
+    s->sequential = (int)options[OPT_SEQUENTIAL];
     s->record = record;
     s->P = P;
     size_t total = (size_t)NA * (KROWS + 7 + 13) + 3 * NF;
