@@ -76,8 +76,9 @@ def active_set_solution(K: Sequence[Sequence[Any]], g: Sequence[Any], tol: Any) 
 
     Active sets ``A`` are tried by size (the empty set first), then in the order of their
     bit masks (the C loop tries them in the same order): ``K_AA m_A = g_A``, feasible
-    when ``m_A >= -tol`` and ``w_j >= -tol`` off ``A`` (``tol``: the velocity tolerance; an approach slower than
-    it is no approach).  Entries of ``m`` below zero by less than ``tol`` are set to 0."""
+    when ``m_A >= -tol`` and ``w_j >= -tol`` off ``A`` (``tol``: the velocity tolerance;
+    an approach slower than it is no approach).  Entries of ``m`` below zero by less than
+    ``tol`` are set to 0."""
     k = len(g)
     zero = g[0] * 0
     masks = sorted(range(1 << k), key=lambda s: (bin(s).count("1"), s))
