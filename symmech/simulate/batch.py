@@ -43,7 +43,7 @@ from symmech.simulate.options import RunOptions
 from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.run import system_for
-from symmech.simulate.system import Functions, SimulationError, check_parameters
+from symmech.simulate.system import FREE, Functions, SimulationError, check_parameters
 
 __all__ = ["BatchResult", "simulate_batch"]
 
@@ -200,11 +200,11 @@ def _check_rows(
     if not fns.constrained:
         return
     for i in range(Q.shape[0]):
-        res = fns.residual(None, t0, Q[i], V[i])
+        res = fns.residual(FREE, t0, Q[i], V[i])
         allowed = 100 * (atol + rtol * float(np.max(np.abs(V[i]), initial=0.0)))
         if res > allowed:
             raise SimulationError(
                 f"V0 row {i} is not in the constraint distribution D: |mu v0| = {res:.3g} >"
                 f" {allowed:.3g}; give a velocity that satisfies the constraints"
             )
-        V[i] = fns.project(None, t0, Q[i], V[i])
+        V[i] = fns.project(FREE, t0, Q[i], V[i])

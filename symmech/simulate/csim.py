@@ -120,7 +120,7 @@ def _locked_force_lines(system: HybridSystem, wall: int, offset: int) -> list[st
     (:meth:`~symmech.simulate.system.HybridSystem.locked_force_expression`) printed in C."""
     scene = system.scene
     decl = scene.declaration
-    expr = system.locked_force_expression(wall)
+    (expr,) = system.locked_force_expression((wall,))
     temps, (body,) = sp.cse([expr], symbols=sp.numbered_symbols("lf"))
     names: dict[sp.Symbol, str] = {TIME: "t"}
     names.update({s: f"q[{i}]" for i, s in enumerate(decl.coordinates)})
@@ -142,7 +142,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
     fns = Functions(system, {str(p): 1.0 for p in scene.parameters})
     by_wall = {(f.kind, f.wall_index): f.name for f in free.code.functions if f.wall}
     moving = tuple(int(m) for m in fns.moving)
-    contacts: dict[int, Any] = {w: system.contact(w) for w in range(walls) if not moving[w]}
+    contacts: dict[int, Any] = {w: system.contact((w,)) for w in range(walls) if not moving[w]}
     locked = tuple(int(w in contacts and contacts[w] is None) for w in range(walls))
     layout: list[tuple[str, ...]] = [free.parameters]
     offsets: dict[int | None, int] = {None: 0}
@@ -184,7 +184,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         residual.append((w, sizes["constraint_residual"], line))
         call = _call(mod, "multipliers", {**qv, "out": "lam"}, off)
         force.append(
-            (w, [f"{{ int st = {call}; *out = lam[{system.normal_index(w)}]; return st; }}"])
+            (w, [f"{{ int st = {call}; *out = lam[{system.normal_index((w,), w)}]; return st; }}"])
         )
     headers = [f"{free.code.stem}.h"] + [
         f"{m.code.stem}.h" for m in contacts.values() if m is not None
@@ -200,7 +200,7 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         moving=moving,
         locked=locked,
         simultaneous=tuple(int(x) for x in fns.simultaneous),
-        normal_index=system.normal_index(0) if walls else 0,
+        normal_index=system.normal_index((0,), 0) if walls else 0,
         wall_names=fns.wall_names,
         m=scene.constraint_matrix.rows,
         has_frame=int(scene.declaration.frame is not None),

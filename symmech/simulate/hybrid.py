@@ -68,8 +68,9 @@ import numpy as np
 from symmech.codegen.module import NumericalError
 from symmech.simulate.events import find_root
 from symmech.simulate.flow import FlowFailure, Segment
-from symmech.simulate.impulses import MAX_SIMULTANEOUS, active_set_solution
+from symmech.simulate.impulses import MAX_SIMULTANEOUS, active_set_solution, solve_small
 from symmech.simulate.result import Event, SimulationResult
+from symmech.simulate.system import SimulationError
 
 __all__ = ["COND_LIMIT", "MAX_STEPS", "Options", "run"]
 
@@ -123,7 +124,7 @@ class _Run:
 
     def __init__(self, fns: Any, flow: Flow, t0: float, y0: np.ndarray, opts: Options):
         self.f, self.flow, self.o = fns, flow, opts
-        self.mode = None
+        self.mode = ()
         self.n = fns.n
         self.walls = fns.walls
         self.names = fns.wall_names
@@ -147,13 +148,14 @@ class _Run:
         self.banded: set[int] = set()
 
     @property
-    def mode(self) -> int | None:
-        """The wall in contact (None: free flight); the flow integrates this mode."""
+    def mode(self) -> tuple[int, ...]:
+        """The walls in contact, sorted (``()``: free flight); the flow integrates this
+        mode."""
         return self.f.mode
 
     @mode.setter
-    def mode(self, wall: int | None) -> None:
-        self.f.mode = wall
+    def mode(self, walls: tuple[int, ...]) -> None:
+        self.f.mode = tuple(sorted(walls))
 
     # -- helpers ----------------------------------------------------------------------------
     def q(self, y: np.ndarray) -> np.ndarray:
@@ -213,18 +215,25 @@ class _Run:
             )
 
     def needs_push(self, wall: int, y: np.ndarray) -> bool:
-        """Whether the wall would have to push to keep the body out of it (lambda_N > 0)."""
+        """Whether the wall would have to push to keep the body out of it (lambda_N > 0),
+        held together with the walls already in contact."""
         return self.normal_force(wall, y) > 0
 
+    def with_wall(self, wall: int) -> tuple[int, ...]:
+        """The current contact mode with ``wall`` added."""
+        return tuple(sorted({*self.mode, wall}))
+
     def normal_force(self, wall: int, y: np.ndarray) -> float:
-        """lambda_N of the wall's contact mode at the state with its normal velocity
-        removed; for a moving wall (no contact mode) minus the second derivative of psi
-        along the free flow, which has the same sign."""
-        if self.f.moving[wall]:
+        """lambda_N of ``wall`` in the contact mode of the walls in contact and ``wall``,
+        at the state with its normal velocity removed; for a moving wall (no contact
+        mode) minus the second derivative of psi along the free flow, which has the same
+        sign."""
+        if self.f.moving[wall] or any(self.f.moving[w] for w in self.mode):
             return -self._free_psi_acceleration(wall, y)
+        mode = self.with_wall(wall)
         q = self.q(y)
-        v = self.f.project(wall, self.t, q, self.v(y))
-        return self.f.normal_force(wall, self.t, q, v)
+        v = self.f.project(mode, self.t, q, self.v(y))
+        return self.f.normal_force(wall, self.t, q, v, mode)
 
     def zeno_speed(self, wall: int, y: np.ndarray) -> Any:
         """The rebound speed below which impacts accumulate: ``zeno_factor tol_v``, or the
@@ -239,10 +248,10 @@ class _Run:
 
     def _free_psi_acceleration(self, wall: int, y: np.ndarray) -> float:
         h = 1e-6 * max(1.0, abs(self.t))
-        ydot = self.f.rhs(None, self.t, y)
+        ydot = self.f.rhs((), self.t, y)
         r0 = self.f.rate(wall, self.t, y, ydot)
         y1 = y + h * ydot
-        r1 = self.f.rate(wall, self.t + h, y1, self.f.rhs(None, self.t + h, y1))
+        r1 = self.f.rate(wall, self.t + h, y1, self.f.rhs((), self.t + h, y1))
         return (r1 - r0) / h
 
     # -- events -----------------------------------------------------------------------------
@@ -250,10 +259,9 @@ class _Run:
         """The earliest event inside ``seg``: (time, state, wall, "wall" | "release")."""
         funcs: list[tuple[int, str]] = []
         for w in range(self.walls):
-            if w != self.mode:
+            if w not in self.mode:
                 funcs.append((w, "wall"))
-        if self.mode is not None:
-            funcs.append((self.mode, "release"))
+        funcs.extend((w, "release") for w in self.mode)
         if not funcs:
             return None
 
@@ -290,7 +298,7 @@ class _Run:
         def value(i: int, t: float, y: np.ndarray) -> float:
             w, what = funcs[i]
             if what == "release":
-                return self.f.normal_force(w, t, self.q(y), self.v(y))
+                return self.f.normal_force(w, t, self.q(y), self.v(y), self.mode)
             psi = self.f.psi(w, t, self.q(y))
             if band[i]:
                 psi = psi + self.tol_psi
@@ -437,8 +445,7 @@ class _Run:
                 f" {100 * self.walls} rounds of the impact law",
             )
         self.band_touching()
-        for w in dict.fromkeys(hit):
-            self.check_accumulation(w)
+        self.check_accumulation(list(dict.fromkeys(hit)))
 
     def check_condition(self, wall: int, q: np.ndarray) -> None:
         """Stop the run when the impact's Gram matrix is ill-conditioned (COND_LIMIT)."""
@@ -459,7 +466,7 @@ class _Run:
         self.check_condition(wall, q)
         v_plus = self.f.impact(wall, self.t, q, v)
         y_plus = np.concatenate([q, v_plus])
-        if self.mode is not None:  # keep the active contact
+        if self.mode:  # keep the active contact
             y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
         self.event("impact", wall, y, y_plus, r)
         self.y = y_plus
@@ -468,7 +475,7 @@ class _Run:
         """The walls closed and approaching now (:meth:`approaching_walls`) when the law
         resolves them together: two or more, each with a Newton direction, in free
         flight, at most MAX_SIMULTANEOUS; else empty (one wall at a time)."""
-        if self.o.impact_law != "simultaneous" or self.mode is not None:
+        if self.o.impact_law != "simultaneous" or self.mode:
             return []
         group = self.approaching_walls()
         if not 2 <= len(group) <= MAX_SIMULTANEOUS:
@@ -515,7 +522,7 @@ class _Run:
         y = self.y
         floor = self.creep_floor(y)
         for w in range(self.walls):
-            if w == self.mode or abs(self.f.psi(w, self.t, self.q(y))) > self.tol_psi:
+            if w in self.mode or abs(self.f.psi(w, self.t, self.q(y))) > self.tol_psi:
                 continue
             if abs(self.f.normal_rate(w, self.t, y)) <= floor:
                 self.banded.add(w)
@@ -528,7 +535,7 @@ class _Run:
         tol_v = self.tol_v(y)
         out = []
         for w in range(self.walls):
-            if w == self.mode or self.f.psi(w, self.t, self.q(y)) > self.tol_psi:
+            if w in self.mode or self.f.psi(w, self.t, self.q(y)) > self.tol_psi:
                 continue
             r = self.f.normal_rate(w, self.t, y)
             if r < -tol_v:
@@ -544,11 +551,20 @@ class _Run:
                 best = (w, r)
         return best
 
-    def check_accumulation(self, wall: int) -> None:
+    def check_accumulation(self, walls: list[int]) -> None:
+        """The walls just hit whose impacts accumulate (rebound below :meth:`zeno_speed`
+        while the wall would have to push) are held, together: walls that accumulate at
+        one instant (a rod bouncing flat) enter contact at once, so that none of them is
+        made plastic before the others."""
         y = self.y
-        rebound = self.f.normal_rate(wall, self.t, y)
-        if rebound > self.zeno_speed(wall, y) or not self.needs_push(wall, y):
+        held: list[tuple[int, float]] = []
+        for wall in walls:
+            rebound = self.f.normal_rate(wall, self.t, y)
+            if rebound <= self.zeno_speed(wall, y) and self.needs_push(wall, y):
+                held.append((wall, rebound))
+        if not held:
             return
+        wall, rebound = held[0]
         times = self.history[wall]
         estimate = self.t
         if len(times) >= 3:
@@ -556,13 +572,14 @@ class _Run:
             if d0 > 0 and 0 < d1 < d0:
                 rho = d1 / d0
                 estimate = self.t + d1 * rho / (1 - rho)
-        if self.o.contact == "stop" or self.f.moving[wall] or self.mode is not None:
+        moving = [w for w, _ in held if self.f.moving[w]]
+        if self.o.contact == "stop" or moving:
+            if moving:
+                wall, rebound = next((w, r) for w, r in held if self.f.moving[w])
             why = (
                 "contact=stop"
                 if self.o.contact == "stop"
                 else "the wall moves (no contact mode for a moving wall)"
-                if self.f.moving[wall]
-                else f"already in contact with {self.names[self.mode]!r}"
             )
             raise _Stop(
                 "zeno",
@@ -571,43 +588,68 @@ class _Run:
                 f" stopped: {why}",
                 estimate,
             )
-        self.enter_contact(
-            wall, rebound, reason=f"accumulation of impacts (t* ~ {float(estimate)!r})"
-        )
+        self.enter_contacts(held, reason=f"accumulation of impacts (t* ~ {float(estimate)!r})")
 
     def enter_contact(self, wall: int, rate: float, reason: str) -> None:
-        if self.f.moving[wall] or self.o.contact == "stop" or self.mode is not None:
-            raise _Stop(
-                "zeno",
-                f"the body comes to rest on wall {self.names[wall]!r} at t = {float(self.t)!r}"
-                f" ({reason}); stopped: "
-                + (
-                    "contact=stop"
-                    if self.o.contact == "stop"
-                    else "the wall moves"
-                    if self.f.moving[wall]
-                    else "contact with two walls at once is not supported"
-                ),
-                self.t,
-            )
-        y = self.y.copy()
-        y_plus = self.stabilise(wall, y, drift=False)
-        self.event("contact", wall, y, y_plus, rate)
-        self.y = y_plus
-        self.mode = wall
+        """Hold ``wall`` with the walls already in contact (:meth:`enter_contacts`)."""
+        self.enter_contacts([(wall, rate)], reason)
 
-    def stabilise(self, mode: int | None, y: np.ndarray, drift: bool = True) -> np.ndarray:
-        """Project onto the mode's constraints: psi = 0 (contact) and P(q) v; with
+    def enter_contacts(self, walls: list[tuple[int, float]], reason: str) -> None:
+        """Hold the walls ``(wall, normal rate)`` with those already in contact (their
+        mode: the scene with every held wall as a permanent constraint; the velocity
+        projected onto it, a plastic impact), then :meth:`settle`.  One contact event per
+        wall; the first carries the energy change."""
+        for wall, _ in walls:
+            if self.f.moving[wall] or self.o.contact == "stop":
+                raise _Stop(
+                    "zeno",
+                    f"the body comes to rest on wall {self.names[wall]!r} at"
+                    f" t = {float(self.t)!r} ({reason}); stopped: "
+                    + ("contact=stop" if self.o.contact == "stop" else "the wall moves"),
+                    self.t,
+                )
+        mode = tuple(sorted({*self.mode, *(w for w, _ in walls)}))
+        y = self.y.copy()
+        y_plus = self.stabilise(mode, y, drift=False)
+        for k, (wall, rate) in enumerate(walls):
+            self.event("contact", wall, y, y_plus, rate, count_energy=k == 0)
+        self.y = y_plus
+        self.mode = mode
+        self.settle()
+
+    def settle(self) -> None:
+        """Release, one at a time (the most negative first), the held walls whose contact
+        force in the current mode is negative: the complementarity 0 <= lambda_N _|_
+        d^2 psi/dt^2 >= 0 on the held set (Baraff 1994), decided by dropping the walls that
+        would pull."""
+        for _ in range(len(self.mode)):
+            q, v = self.q(self.y), self.v(self.y)
+            forces = [(self.f.normal_force(w, self.t, q, v, self.mode), w) for w in self.mode]
+            worst, wall = min(forces)
+            if worst >= 0:
+                return
+            self.release(wall)
+
+    def release(self, wall: int) -> None:
+        """Let ``wall`` go: the others stay held; the wall is banded until it is left."""
+        self.event("release", wall, self.y, self.y, 0.0)
+        self.mode = tuple(w for w in self.mode if w != wall)
+        self.banded.add(wall)
+
+    def stabilise(self, mode: tuple[int, ...], y: np.ndarray, drift: bool = True) -> np.ndarray:
+        """Project onto the mode's constraints: every held psi = 0 (Gauss-Newton, two
+        steps of ``q -= G^T (G G^T)^-1 psi``, G the walls' gradients) and P(q) v; with
         ``drift``, the residual before projection counts as integration drift."""
         q, v = self.q(y).copy(), self.v(y)
-        if mode is not None:
-            for _ in range(2):
-                psi = self.f.psi(mode, self.t, q)
-                g = self.f.gradient(mode, self.t, q)
-                gg = sum(gi * gi for gi in g)
-                if gg == 0:
-                    break
-                q = q - psi * g / gg
+        for _ in range(2 if mode else 0):
+            psi = [self.f.psi(w, self.t, q) for w in mode]
+            G = [self.f.gradient(w, self.t, q) for w in mode]
+            GG = [[sum(a * b for a, b in zip(gi, gj, strict=True)) for gj in G] for gi in G]
+            z = solve_small(GG, psi)
+            if z is None:
+                break
+            for zi, gi in zip(z, G, strict=True):
+                q = q - zi * gi
         if drift:
             self.drift = max(self.drift, self.f.residual(mode, self.t, q, v))
         v = self.f.project(mode, self.t, q, v)
@@ -621,7 +663,7 @@ class _Run:
         if hit is not None:
             self.impacts(*hit)
         for w in range(self.walls):
-            if self.mode is None and abs(self.f.psi(w, self.t, self.q(self.y))) <= self.tol_psi:
+            if w not in self.mode and abs(self.f.psi(w, self.t, self.q(self.y))) <= self.tol_psi:
                 rate = self.f.normal_rate(w, self.t, self.y)
                 if abs(rate) <= self.tol_v(self.y) and self.needs_push(w, self.y):
                     self.enter_contact(w, rate, reason="initial state at rest on the wall")
@@ -643,7 +685,7 @@ class _Run:
                 ev = self.detect(seg)
                 if ev is None:
                     y1 = seg.y1
-                    if self.mode is not None or self.f.constrained:
+                    if self.mode or self.f.constrained:
                         self.t = seg.t1
                         y1 = self.stabilise(self.mode, y1)
                         self.flow.accept_projection(y1)
@@ -663,9 +705,8 @@ class _Run:
                 self.t, self.y = t_e, self.f.array(y_e)
                 self.record(self.t, self.y)
                 if what == "release":
-                    self.event("release", wall, self.y, self.y, 0.0)
-                    self.mode = None
-                    self.banded.add(wall)
+                    self.release(wall)
+                    self.settle()
                 else:
                     self.at_wall(wall)
                 self.record(self.t, self.y)
@@ -676,6 +717,8 @@ class _Run:
         except FlowFailure as exc:
             return "failed", str(exc), None
         except NumericalError as exc:  # a generated call failed at an accepted state
+            return "failed", f"{exc} at t = {float(self.t)!r}", None
+        except SimulationError as exc:  # a contact the loop cannot hold (indeterminate)
             return "failed", f"{exc} at t = {float(self.t)!r}", None
         return "finished", f"reached t_end = {float(t_end)!r}", None
 

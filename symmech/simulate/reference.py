@@ -33,6 +33,8 @@ from symmech.simulate.hybrid import Options, run
 from symmech.simulate.precise import GaussLegendre
 from symmech.simulate.result import SimulationResult
 from symmech.simulate.system import (
+    FREE,
+    Mode,
     SimulationError,
     check_parameters,
     contact_rows,
@@ -60,7 +62,7 @@ class MpFunctions:
         self.moving = tuple(TIME in w.psi.free_symbols for w in scene.walls)
         self.energy_conserved = scene.conservative
         self.simultaneous = simultaneous_walls(scene)
-        self.mode: int | None = None
+        self.mode: Mode = FREE
         self.eps = mpmath.eps
         self._values = {
             p: sp.Float(mpmath.mpf(params[str(p)]), mpmath.mp.dps + 5) for p in scene.parameters
@@ -68,7 +70,7 @@ class MpFunctions:
         self._q = list(decl.coordinates)
         self._v = list(decl.velocities)
         self._cache: dict[Any, Callable[..., Any]] = {}
-        self._contact: dict[int, Scene | None] = {}
+        self._contact: dict[Mode, Scene | None] = {}
 
     @staticmethod
     def array(y: Any) -> np.ndarray:
@@ -91,21 +93,21 @@ class MpFunctions:
             return _mp_array(np.asarray(out, dtype=object).ravel())
         return mpmath.mpf(out)
 
-    def contact_scene(self, wall: int) -> Scene | None:
-        if wall not in self._contact:
-            self._contact[wall] = contact_scene(self.scene, wall)
-        return self._contact[wall]
+    def contact_scene(self, mode: Mode) -> Scene | None:
+        if mode not in self._contact:
+            self._contact[mode] = contact_scene(self.scene, mode)
+        return self._contact[mode]
 
-    def locked(self, mode: int | None) -> bool:
-        return mode is not None and self.contact_scene(mode) is None
+    def locked(self, mode: Mode) -> bool:
+        return bool(mode) and self.contact_scene(mode) is None
 
-    def _mode_scene(self, mode: int | None) -> Scene:
-        scene = self.scene if mode is None else self.contact_scene(mode)
+    def _mode_scene(self, mode: Mode) -> Scene:
+        scene = self.contact_scene(mode) if mode else self.scene
         assert scene is not None
         return scene
 
     # -- the interface ----------------------------------------------------------------------
-    def rhs(self, mode: int | None, t: Any, y: np.ndarray) -> np.ndarray:
+    def rhs(self, mode: Mode, t: Any, y: np.ndarray) -> np.ndarray:
         if self.locked(mode):
             return _mp_array([0] * len(y))
         scene = self._mode_scene(mode)
@@ -133,7 +135,7 @@ class MpFunctions:
         return r
 
     def normal_rate(self, wall: int, t: Any, y: np.ndarray) -> Any:
-        return self.rate(wall, t, y, self.rhs(None, t, y))
+        return self.rate(wall, t, y, self.rhs(FREE, t, y))
 
     def rate_change(self, wall: int, t: Any, q: np.ndarray, dv: np.ndarray) -> Any:
         """As :meth:`.system.Functions.rate_change`, in mpmath."""
@@ -154,8 +156,8 @@ class MpFunctions:
     def energy(self, t: Any, q: np.ndarray, v: np.ndarray) -> Any:
         return self._eval(("energy",), self.scene.energy, t, q, v)
 
-    def project(self, mode: int | None, t: Any, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        if mode is None and not self.constrained:
+    def project(self, mode: Mode, t: Any, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        if not mode and not self.constrained:
             return v
         if self.locked(mode):
             return _mp_array([0] * len(v))
@@ -164,8 +166,8 @@ class MpFunctions:
         n = self.n
         return _mp_array([mpmath.fdot(list(P[i * n : (i + 1) * n]), list(v)) for i in range(n)])
 
-    def residual(self, mode: int | None, t: Any, q: np.ndarray, v: np.ndarray) -> Any:
-        if mode is None and not self.constrained:
+    def residual(self, mode: Mode, t: Any, q: np.ndarray, v: np.ndarray) -> Any:
+        if not mode and not self.constrained:
             return mpmath.mpf(0)
         if self.locked(mode):
             return max(abs(x) for x in v)
@@ -179,19 +181,23 @@ class MpFunctions:
         """Not limited at 30+ digits: always 1 (see :meth:`.system.Functions.impact_condition`)."""
         return 1.0
 
-    def normal_force(self, wall: int, t: Any, q: np.ndarray, v: np.ndarray) -> Any:
+    def normal_force(
+        self, wall: int, t: Any, q: np.ndarray, v: np.ndarray, mode: Mode | None = None
+    ) -> Any:
+        mode = (wall,) if mode is None else mode
         m = self.scene.constraint_matrix.rows
-        if self.locked(wall):
+        k = mode.index(wall)
+        if self.locked(mode):
 
             def statics() -> sp.Expr:
-                A = sp.Matrix(contact_rows(self.scene, wall))
+                A = sp.Matrix(contact_rows(self.scene, mode))
                 f0 = sp.Matrix(self.scene.forcing()).xreplace({x: 0 for x in self._v})
-                return A.T.LUsolve(-f0)[m]
+                return A.T.LUsolve(-f0)[m + k]
 
-            return self._eval(("locked", wall), statics, t, q)
-        scene = self._mode_scene(wall)
-        lam = self._eval(("lam", wall), lambda: sp.Matrix(scene.multipliers()), t, q, v)
-        return lam[m]
+            return self._eval(("locked", mode, wall), statics, t, q)
+        scene = self._mode_scene(mode)
+        lam = self._eval(("lam", mode), lambda: sp.Matrix(scene.multipliers()), t, q, v)
+        return lam[m + k]
 
 
 class _MpSegment(Segment):
@@ -316,7 +322,7 @@ def reference_run(
         if len(y0) != 2 * n:
             raise SimulationError(f"q0, v0: expected {n} values each")
         if fns.constrained:
-            y0[n:] = fns.project(None, 0, y0[:n], y0[n:])
+            y0[n:] = fns.project(FREE, 0, y0[:n], y0[n:])
         opts = Options(
             t_end=mpmath.mpf(t_end),
             rtol=tol,

@@ -29,6 +29,7 @@ from symmech.simulate.backend import BACKENDS, backend_named
 from symmech.simulate.options import CONTACT_MODES, RunOptions
 from symmech.simulate.result import SimulationResult
 from symmech.simulate.system import (
+    FREE,
     Functions,
     HybridSystem,
     SimulationError,
@@ -122,12 +123,12 @@ def initial_state(fns: Functions, opts: RunOptions, q: np.ndarray, v: np.ndarray
             )
     y0 = np.concatenate([q, v])
     if fns.constrained:
-        res = fns.residual(None, t0, q, v)
+        res = fns.residual(FREE, t0, q, v)
         allowed = 100 * (opts.atol + opts.rtol * float(np.max(np.abs(v), initial=0.0)))
         if res > allowed:
             raise SimulationError(
                 f"v0 is not in the constraint distribution D: |mu v0| = {res:.3g} >"
                 f" {allowed:.3g}; give a velocity that satisfies the constraints"
             )
-        y0[fns.n :] = fns.project(None, t0, q, v)
+        y0[fns.n :] = fns.project(FREE, t0, q, v)
     return y0

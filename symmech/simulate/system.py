@@ -50,7 +50,9 @@ from symmech.errors import SymmechError
 from symmech.scene import Scene
 
 __all__ = [
+    "FREE",
     "HybridSystem",
+    "Mode",
     "SimulationError",
     "contact_scene",
     "real_number",
@@ -63,34 +65,42 @@ class SimulationError(SymmechError, ValueError):
     """A simulation cannot start: bad state, parameters, options or scene."""
 
 
-def contact_rows(scene: Scene, wall: int) -> list[list[sp.Expr]]:
-    """The constraint rows ``[mu; dpsi S; nu]`` of the contact mode of ``wall`` (velocity
-    basis): the scene's constraints, the wall's gradient, its impulsive constraints."""
+#: A contact mode: the walls held, as sorted indices; ``()`` is free flight.
+Mode = tuple[int, ...]
+FREE: Mode = ()
+
+
+def contact_rows(scene: Scene, walls: Mode) -> list[list[sp.Expr]]:
+    """The constraint rows ``[mu; dpsi_1 S; ...; dpsi_k S; nu_1; ...; nu_k]`` of the
+    contact mode of ``walls`` (velocity basis): the scene's constraints, the walls'
+    gradients, their impulsive constraints."""
     decl = scene.declaration
-    w = scene.walls[wall]
-    if TIME in w.psi.free_symbols:
-        raise SimulationError(
-            f"wall {w.name!r} moves (psi depends on t): its contact constraint"
-            " dpsi v + psi_t = 0 is affine in v and has no contact mode"
-        )
-    grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in decl.coordinates]])
-    row = grad * decl.frame if decl.frame is not None else grad
     rows = [list(decl.constraint_matrix.row(i)) for i in range(decl.m)]
-    rows.append(list(row))
-    rows.extend(list(w.impulsive_matrix.row(i)) for i in range(w.impulsive_matrix.rows))
-    return rows
+    extra: list[list[sp.Expr]] = []
+    for wall in walls:
+        w = scene.walls[wall]
+        if TIME in w.psi.free_symbols:
+            raise SimulationError(
+                f"wall {w.name!r} moves (psi depends on t): its contact constraint"
+                " dpsi v + psi_t = 0 is affine in v and has no contact mode"
+            )
+        grad = sp.Matrix([[sp.diff(w.psi, qi) for qi in decl.coordinates]])
+        rows.append(list(grad * decl.frame if decl.frame is not None else grad))
+        extra.extend(list(w.impulsive_matrix.row(i)) for i in range(w.impulsive_matrix.rows))
+    return rows + extra
 
 
-def contact_scene(scene: Scene, wall: int) -> Scene | None:
-    """The scene of ``scene`` in contact with static wall ``wall``: the constraints
-    :func:`contact_rows`, everything else unchanged; the normal multiplier is entry ``m``
-    (after the scene's own ``m`` multipliers).  None when the contact leaves no motion
-    (as many constraints as coordinates: the body is locked on the wall)."""
+def contact_scene(scene: Scene, walls: Mode) -> Scene | None:
+    """The scene of ``scene`` in contact with the static walls ``walls``: the constraints
+    :func:`contact_rows`, everything else unchanged; the normal multipliers are entries
+    ``m .. m + k - 1`` (after the scene's own ``m`` multipliers).  None when the contact
+    leaves no motion (as many constraints as coordinates: the body is locked)."""
     decl = scene.declaration
-    rows = contact_rows(scene, wall)
+    rows = contact_rows(scene, walls)
     if len(rows) >= decl.n:
         return None
-    return scene.replace(constraints=rows, walls=(), name=f"{scene.name}_contact_{wall}")
+    tag = "_".join(str(w) for w in walls)
+    return scene.replace(constraints=rows, walls=(), name=f"{scene.name}_contact_{tag}")
 
 
 def simultaneous_walls(scene: Scene) -> tuple[bool, ...]:
@@ -225,18 +235,19 @@ def _checked_parameters(rules: _ParameterRules, params: object) -> dict[str, flo
 class HybridSystem:
     """The generated functions of ``scene`` for the hybrid loop (see the module docstring).
 
-    Build with :meth:`build`; ``modules`` maps ``None`` (free flight) and each static wall's
-    index (its contact mode) to a loaded :class:`~symmech.codegen.module.SceneModule`.
+    Build with :meth:`build`; ``modules`` maps each :data:`Mode` (``()``: free flight; the
+    sorted indices of the static walls held) to a loaded
+    :class:`~symmech.codegen.module.SceneModule`.
     """
 
     scene: Scene
     target: str
     strategy: str
     definitions: Mapping[Any, Any]
-    modules: dict[int | None, SceneModule] = field(default_factory=dict)
+    modules: dict[Mode, SceneModule] = field(default_factory=dict)
     #: the modules carry the Jacobian d(rhs)/dy (for implicit integrators)
     jacobian: bool = False
-    _locked: dict[tuple[str, int], Any] = field(default_factory=dict, repr=False)
+    _locked: dict[tuple[str, Mode], Any] = field(default_factory=dict, repr=False)
     _moving: tuple[bool, ...] | None = field(default=None, repr=False)
     _conserved: bool | None = field(default=None, repr=False)
 
@@ -256,7 +267,7 @@ class HybridSystem:
         if target not in ("c", "numpy"):
             raise SimulationError(f"target must be 'c' or 'numpy', got {target!r}")
         system = cls(scene, target, strategy, dict(definitions or {}), jacobian=jacobian)
-        system.modules[None] = system._load(scene)
+        system.modules[FREE] = system._load(scene)
         return system
 
     def _load(self, scene: Scene) -> SceneModule:
@@ -283,7 +294,7 @@ class HybridSystem:
 
     @property
     def free(self) -> SceneModule:
-        return self.modules[None]
+        return self.modules[FREE]
 
     @property
     def moving(self) -> tuple[bool, ...]:
@@ -303,45 +314,55 @@ class HybridSystem:
         """Whether ``wall`` is static (a moving wall has no contact mode)."""
         return TIME not in self.scene.walls[wall].psi.free_symbols
 
-    def contact(self, wall: int) -> SceneModule | None:
-        """The loaded contact-mode module of ``wall`` (generated on first use); None when
-        the contact locks the body (:func:`contact_scene`)."""
-        if wall not in self.modules:
-            cs = contact_scene(self.scene, wall)
-            self.modules[wall] = None if cs is None else self._load(cs)  # type: ignore[assignment]
-        return self.modules[wall]
+    def contact(self, mode: Mode) -> SceneModule | None:
+        """The loaded module of the contact mode ``mode`` (generated on first use); None
+        when the contact locks the body (:func:`contact_scene`)."""
+        if mode not in self.modules:
+            cs = contact_scene(self.scene, mode)
+            self.modules[mode] = None if cs is None else self._load(cs)  # type: ignore[assignment]
+        return self.modules[mode]
 
-    def locked_force_expression(self, wall: int) -> sp.Expr:
-        """``lambda_N(t, q)`` of a contact that locks the body: entry ``m`` of the statics
-        ``A^T lambda = -f(q, 0)`` (Carnot paper eq. 5 at rest; A the contact rows), with
-        the run's definitions of the functions of time substituted."""
+    def locked_force_expression(self, mode: Mode) -> list[sp.Expr]:
+        """``lambda_N(t, q)`` of each wall of a contact that locks the body: entries ``m ..
+        m + k - 1`` of the statics ``A^T lambda = -f(q, 0)`` (Carnot paper eq. 5 at rest;
+        A the contact rows, square), with the run's definitions of the functions of time
+        substituted.  More rows than coordinates (a statically indeterminate rest) is
+        refused."""
         decl = self.scene.declaration
-        A = sp.Matrix(contact_rows(self.scene, wall))
+        A = sp.Matrix(contact_rows(self.scene, mode))
+        if A.rows != A.cols:
+            names = [self.scene.walls[w].name for w in mode]
+            raise SimulationError(
+                f"the body rests on walls {names} with {A.rows} contact constraints for"
+                f" {A.cols} coordinates: the contact forces are statically indeterminate"
+            )
         f0 = sp.Matrix(self.scene.forcing()).xreplace({v: 0 for v in decl.velocities})
         f0 = defined(f0, definition_rules(self.scene, self.definitions))
-        return A.T.LUsolve(-f0)[decl.m]
+        lam = A.T.LUsolve(-f0)
+        return [lam[decl.m + k] for k in range(len(mode))]
 
-    def locked_force(self, wall: int) -> Any:
+    def locked_force(self, mode: Mode) -> Any:
         """:meth:`locked_force_expression` as a NumPy function of (t, q, p) (p in the
-        order of the scene's parameters)."""
-        key = ("locked", wall)
+        order of the scene's parameters) returning the list of the walls' forces."""
+        key = ("locked", mode)
         if key not in self._locked:
             decl = self.scene.declaration
-            expr = self.locked_force_expression(wall)
+            expr = self.locked_force_expression(mode)
             args = [TIME, sp.Matrix(decl.coordinates), sp.Matrix(decl.parameters)]
             self._locked[key] = sp.lambdify(args, expr, modules="numpy", cse=True)
         return self._locked[key]
 
-    def normal_index(self, wall: int) -> int:
-        """Index of the normal multiplier lambda_N in the contact mode's multipliers."""
-        del wall
-        return self.scene.constraint_matrix.rows
+    def normal_index(self, mode: Mode, wall: int) -> int:
+        """Index of ``wall``'s normal multiplier lambda_N in the contact mode's
+        multipliers."""
+        return self.scene.constraint_matrix.rows + mode.index(wall)
 
 
 class Functions:
     """The evaluations the hybrid loop makes, over a :class:`HybridSystem` at fixed
-    parameters, in float64.  ``mode`` is ``None`` (free flight) or the index of the wall in
-    contact.  Every method takes and returns NumPy arrays of float64 (scalars as floats).
+    parameters, in float64.  ``mode`` is a :data:`Mode`: ``()`` (free flight) or the sorted
+    indices of the walls held.  Every method takes and returns NumPy arrays of float64
+    (scalars as floats).
     (:class:`symmech.simulate.reference.MpFunctions` is the same interface in mpmath.)"""
 
     #: The arithmetic's unit roundoff, and its array constructor.
@@ -384,16 +405,16 @@ class Functions:
         #: Per wall: its impact has a Newton direction (law "newton", no impulsive
         #: constraints), so it can be resolved with others at once (:mod:`.impulses`).
         self.simultaneous = simultaneous_walls(system.scene)
-        #: The mode the flow integrates (None: free flight; a wall's index: in contact).
-        self.mode: int | None = None
-        self._p: dict[int | None, np.ndarray | None] = {}
-        self._takes_t: dict[tuple[int | None, str], bool] = {}
+        #: The mode the flow integrates (``()``: free flight; the walls held).
+        self.mode: Mode = FREE
+        self._p: dict[Mode, np.ndarray | None] = {}
+        self._takes_t: dict[tuple[Mode, str], bool] = {}
 
     # -- plumbing -------------------------------------------------------------------------
-    def _module(self, mode: int | None) -> SceneModule | None:
-        return self.system.free if mode is None else self.system.contact(mode)
+    def _module(self, mode: Mode) -> SceneModule | None:
+        return self.system.contact(mode) if mode else self.system.free
 
-    def _pvec(self, mode: int | None) -> np.ndarray | None:
+    def _pvec(self, mode: Mode) -> np.ndarray | None:
         if mode not in self._p:
             mod = self._module(mode)
             assert mod is not None
@@ -405,11 +426,11 @@ class Functions:
                 self._takes_t[(mode, f.name)] = f.takes_time
         return self._p[mode]
 
-    def locked(self, mode: int | None) -> bool:
+    def locked(self, mode: Mode) -> bool:
         """Whether ``mode`` is a contact that leaves no motion (the body rests)."""
-        return mode is not None and self.system.contact(mode) is None
+        return bool(mode) and self.system.contact(mode) is None
 
-    def _call(self, mode: int | None, name: str, t: float, *state: np.ndarray) -> np.ndarray:
+    def _call(self, mode: Mode, name: str, t: float, *state: np.ndarray) -> np.ndarray:
         p = self._pvec(mode)
         mod = self._module(mode)
         assert mod is not None
@@ -420,8 +441,8 @@ class Functions:
         return self.system.free._wall_function(kind, wall)
 
     # -- the evaluations --------------------------------------------------------------------
-    def rhs(self, mode: int | None, t: float, y: np.ndarray) -> np.ndarray:
-        """y_dot = (q_dot, v_dot) in free flight (mode None) or in contact with a wall."""
+    def rhs(self, mode: Mode, t: float, y: np.ndarray) -> np.ndarray:
+        """y_dot = (q_dot, v_dot) in free flight (mode ``()``) or in contact."""
         if self.locked(mode):
             return np.zeros_like(y)
         try:
@@ -446,7 +467,7 @@ class Functions:
         """psi_w(t, q) of every wall."""
         return np.array([self.psi(w, t, y[: self.n]) for w in range(self.walls)])
 
-    def jac(self, mode: int | None, t: float, y: np.ndarray) -> np.ndarray:
+    def jac(self, mode: Mode, t: float, y: np.ndarray) -> np.ndarray:
         """d(y_dot)/dy in the mode (the generated Jacobian; zero in a locked contact)."""
         if self.locked(mode):
             return np.zeros((len(y), len(y)))
@@ -458,21 +479,21 @@ class Functions:
 
     def psi(self, wall: int, t: float, q: np.ndarray) -> float:
         """The gap of ``wall`` at (t, q)."""
-        return float(self._call(None, self._wall_name("psi", wall), t, q))
+        return float(self._call(FREE, self._wall_name("psi", wall), t, q))
 
     def rate(self, wall: int, t: float, y: np.ndarray, ydot: np.ndarray) -> float:
         """d psi/dt = dpsi(q) q_dot + psi_t along the flow (q_dot from ``ydot``)."""
         n = self.n
         q = y[:n]
-        g = self._call(None, self._wall_name("dpsi", wall), t, q)
+        g = self._call(FREE, self._wall_name("dpsi", wall), t, q)
         r = float(np.dot(g, ydot[:n]))
         if self.moving[wall]:
-            r += float(self._call(None, self._wall_name("psi_t", wall), t, q))
+            r += float(self._call(FREE, self._wall_name("psi_t", wall), t, q))
         return r
 
     def normal_rate(self, wall: int, t: float, y: np.ndarray) -> float:
         """d psi/dt at a state (q_dot from the kinematics of the free flow)."""
-        return self.rate(wall, t, y, self.rhs(None, t, y))
+        return self.rate(wall, t, y, self.rhs(FREE, t, y))
 
     def rate_change(self, wall: int, t: float, q: np.ndarray, dv: np.ndarray) -> float:
         """``dpsi S dv``: the change of the wall's normal rate for a velocity change
@@ -480,33 +501,33 @@ class Functions:
         if self.system.scene.frame is None:
             qdot = dv
         else:
-            qdot = self.rhs(None, t, np.concatenate([q, dv]))[: self.n]
+            qdot = self.rhs(FREE, t, np.concatenate([q, dv]))[: self.n]
         return float(np.dot(self.gradient(wall, t, q), qdot))
 
     def gradient(self, wall: int, t: float, q: np.ndarray) -> np.ndarray:
         """d psi/d q of ``wall`` (coordinates)."""
-        return self._call(None, self._wall_name("dpsi", wall), t, q)
+        return self._call(FREE, self._wall_name("dpsi", wall), t, q)
 
     def impact(self, wall: int, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """v+ of the scene's closed-form (or KKT) impact map at ``wall``."""
-        return self._call(None, self._wall_name("impact", wall), t, q, v)
+        return self._call(FREE, self._wall_name("impact", wall), t, q, v)
 
     def energy(self, t: float, q: np.ndarray, v: np.ndarray) -> float:
         """T + V."""
-        return float(self._call(None, "energy", t, q, v))
+        return float(self._call(FREE, "energy", t, q, v))
 
-    def project(self, mode: int | None, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    def project(self, mode: Mode, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """P(q) v: v projected g-orthogonally onto the mode's distribution."""
-        if mode is None and not self.constrained:
+        if not mode and not self.constrained:
             return v
         if self.locked(mode):
             return np.zeros_like(v)
         P = self._call(mode, "projector_P", t, q)
         return P @ v
 
-    def residual(self, mode: int | None, t: float, q: np.ndarray, v: np.ndarray) -> float:
+    def residual(self, mode: Mode, t: float, q: np.ndarray, v: np.ndarray) -> float:
         """max |mu v| of the mode's constraints (0 for an unconstrained free flight)."""
-        if mode is None and not self.constrained:
+        if not mode and not self.constrained:
             return 0.0
         if self.locked(mode):
             return float(np.max(np.abs(v), initial=0.0))
@@ -521,21 +542,24 @@ class Functions:
             return 1.0
         n = self.n
         eye = np.eye(n)
-        g = self._call(None, "mass_matrix", t, q)
-        mu = np.column_stack([self._call(None, "constraint_residual", t, q, e) for e in eye])
+        g = self._call(FREE, "mass_matrix", t, q)
+        mu = np.column_stack([self._call(FREE, "constraint_residual", t, q, e) for e in eye])
         row = self.gradient(wall, t, q)
         if self.system.scene.frame is not None:
-            S = np.column_stack([self.rhs(None, t, np.concatenate([q, e]))[:n] for e in eye])
+            S = np.column_stack([self.rhs(FREE, t, np.concatenate([q, e]))[:n] for e in eye])
             row = row @ S
         A = np.vstack([mu, row])
         C = A @ np.linalg.solve(g, A.T)
         return float(np.linalg.cond(C))
 
-    def normal_force(self, wall: int, t: float, q: np.ndarray, v: np.ndarray) -> float:
-        """lambda_N of the contact mode of ``wall`` at (q, v): positive while the wall
-        pushes."""
-        if self.locked(wall):
+    def normal_force(
+        self, wall: int, t: float, q: np.ndarray, v: np.ndarray, mode: Mode | None = None
+    ) -> float:
+        """lambda_N of ``wall`` in the contact mode ``mode`` (default: the wall alone) at
+        (q, v): positive while the wall pushes."""
+        mode = (wall,) if mode is None else mode
+        if self.locked(mode):
             p = [self._params[str(s)] for s in self.system.scene.parameters]
-            return float(self.system.locked_force(wall)(t, q, p))
-        lam = self._call(wall, "multipliers", t, q, v)
-        return float(lam[self.system.normal_index(wall)])
+            return float(self.system.locked_force(mode)(t, q, p)[mode.index(wall)])
+        lam = self._call(mode, "multipliers", t, q, v)
+        return float(lam[self.system.normal_index(mode, wall)])

@@ -47,7 +47,13 @@ from symmech.simulate.csim import (
 from symmech.simulate.hybrid import Options
 from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
-from symmech.simulate.system import Functions, HybridSystem, SimulationError, check_parameters
+from symmech.simulate.system import (
+    FREE,
+    Functions,
+    HybridSystem,
+    SimulationError,
+    check_parameters,
+)
 from symmech.sweep.grid import Columns
 from symmech.sweep.worker import ChunkInput, LibrarySource, LoopOptions, run_chunk
 
@@ -146,7 +152,7 @@ class Plan:
 
         def build() -> HybridSystem:
             system = HybridSystem(self.scene, "c", self.strategy, dict(self.definitions))
-            system.modules[None] = self.free_code.load()
+            system.modules[FREE] = self.free_code.load()
             return system
 
         return self._loaded("system", build)
@@ -342,7 +348,7 @@ def prepare(plan: Plan, index: int, lo: int, grid: np.ndarray) -> Prepared:
             g = int(group[i])
             if g not in fns:
                 fns[g] = Functions(plan.system, values[g])
-            res = fns[g].residual(None, t0, Q[i], V[i])
+            res = fns[g].residual(FREE, t0, Q[i], V[i])
             allowed = 100 * (opts.atol + opts.rtol * float(np.max(np.abs(V[i]), initial=0.0)))
             if res > allowed:
                 messages[int(i)] = (
@@ -350,7 +356,7 @@ def prepare(plan: Plan, index: int, lo: int, grid: np.ndarray) -> Prepared:
                     f" {allowed:.3g}; give a velocity that satisfies the constraints"
                 )
             else:
-                V[i] = fns[g].project(None, t0, Q[i], V[i])
+                V[i] = fns[g].project(FREE, t0, Q[i], V[i])
         rows = _without(rows, messages)
     runs = _groups(rows, group)  # ascending vectors, rows in order within each
     order = np.concatenate([idx for _, idx in runs]) if runs else rows
