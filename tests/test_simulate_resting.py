@@ -21,7 +21,7 @@ import symmech as sm
 
 G = 9.81
 LADDER = {"alpha": 0.0, "g": G, "l": 1.0, "m": 1.0}
-PY_BACKENDS = ["numpy", "scipy"]
+BACKENDS = ["c", "numpy", "scipy"]
 
 
 def leave_wall_time(theta0: float, l: float = 1.0) -> float:
@@ -46,7 +46,7 @@ def ladder_run(theta0: float, backend: str) -> sm.SimulationResult:
     )  # fmt: skip
 
 
-@pytest.mark.parametrize("backend", PY_BACKENDS)
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("theta0", [1.3, 1.0, 0.6])
 def test_the_ladder_leaves_the_wall_where_and_when_the_energy_integral_says(backend, theta0):
     res = ladder_run(theta0, backend)
@@ -61,7 +61,7 @@ def test_the_ladder_leaves_the_wall_where_and_when_the_energy_integral_says(back
     assert res.stats["energy_drift"] < 1e-8
 
 
-@pytest.mark.parametrize("backend", PY_BACKENDS)
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_a_rod_dropped_flat_without_restitution_lies_on_both_ends(backend):
     params = {"alpha": 0.0, "g": G, "l": 1.0, "m": 1.0}
     res = sm.simulate(
@@ -78,7 +78,7 @@ def test_a_rod_dropped_flat_without_restitution_lies_on_both_ends(backend):
     assert np.max(np.abs(y - np.sin(th))) < 1e-10 and np.max(np.abs(y + np.sin(th))) < 1e-10
 
 
-@pytest.mark.parametrize("backend", PY_BACKENDS)
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("alpha", [0.5, 1.0])
 def test_a_rod_dropped_flat_with_restitution_finishes(backend, alpha):
     """alpha = 0.5: bounces accumulate on both ends, then it lies on both; alpha = 1:
@@ -95,7 +95,7 @@ def test_a_rod_dropped_flat_with_restitution_finishes(backend, alpha):
     assert all(abs(e.v_plus[2]) < 1e-9 for e in res.impacts())
 
 
-@pytest.mark.parametrize("backend", PY_BACKENDS)
+@pytest.mark.parametrize("backend", BACKENDS)
 def test_a_ball_in_a_v_corner_comes_to_rest_at_the_vertex(backend):
     params = {"alpha": 0.5, "beta": 0.6, "g": G, "m": 1.0}
     res = sm.simulate(
@@ -119,3 +119,23 @@ def test_a_locked_rest_on_more_walls_than_coordinates_is_refused_with_a_reason()
     res = sm.simulate(scene, [0.0], [0.0], 1.0, params={"m": 1.0, "g": G}, backend="numpy")
     assert res.status == "failed"
     assert "statically indeterminate" in res.message
+
+
+def test_c_builds_the_contact_modes_a_run_reaches_and_batches_agree_with_single_runs():
+    """The C library starts with each wall's own contact mode; a run that comes to rest on
+    both ends of the rod stops for the pair's mode, which is built in, and runs again: the
+    result equals the NumPy loop's decisions, and a batch row equals its single run."""
+    scene = sm.load_scene("falling_rod")
+    params = {"alpha": 0.5, "g": G, "l": 1.0, "m": 1.0}
+    Q = [[0.0, 1.0, 0.0], [0.0, 2.0, 0.0], [0.0, 1.5, 0.0]]
+    V = [[0.3, 0.0, 0.0]] * 3
+    batch = sm.simulate_batch(scene, Q, V, 4.0, params=params)
+    assert list(batch.statuses) == ["finished"] * 3
+    system = sm.simulate.system_for(scene, "c")
+    assert (0, 1) in system.c_modes
+    for i in range(3):
+        c = sm.simulate(scene, Q[i], V[i], 4.0, params=params)
+        py = sm.simulate(scene, Q[i], V[i], 4.0, params=params, backend="numpy")
+        np.testing.assert_array_equal(c.q[-1], batch.q[i])
+        assert [(e.kind, e.wall) for e in c.events] == [(e.kind, e.wall) for e in py.events]
+        np.testing.assert_allclose(c.q[-1], py.q[-1], atol=1e-9)

@@ -23,6 +23,7 @@ import os
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -34,9 +35,11 @@ from symmech.simulate.csim import (
     EVENT_COUNTS,
     FINISHED_CODE,
     REACHED_END_CODE,
+    CLibrary,
     decode,
     info_entry,
     library,
+    missing_mode,
     options_vector,
 )
 from symmech.simulate.options import RunOptions
@@ -127,30 +130,21 @@ def simulate_batch(
     fns = Functions(system, values)
     index, vec = options_vector(o.loop(tend), method, o.step_cap(tend), t0f)
     _check_rows(fns, values, Q, V, t0f, rtol_f, atol_f)
-    lib = library(system)
-    P = lib.parameters(values)
     N = Q.shape[0]
     Y = np.ascontiguousarray(np.hstack([Q, V]))
-    width = INFO_HEAD + 2 * n
-    info = np.zeros((N, width))
-    # more chunks than threads, taken in turn: runs of unequal length balance out
-    pieces = min(N, threads if threads == 1 else 8 * threads)
-    bounds = np.linspace(0, N, pieces + 1).astype(int)
-
-    def chunk(k: int) -> int:
-        lo, hi = int(bounds[k]), int(bounds[k + 1])
-        if hi <= lo:
-            return 0
-        block = np.zeros((hi - lo, width))
-        status = lib.batch(hi - lo, Y[lo:hi].ctypes.data, t0f, index, vec.ctypes.data,
-                           P.ctypes.data, block.ctypes.data)  # fmt: skip
-        info[lo:hi] = block
-        return int(status)
-
-    with ThreadPoolExecutor(max_workers=min(threads, pieces)) as pool:
-        codes = list(pool.map(chunk, range(len(bounds) - 1)))
-    if any(codes):
-        raise MemoryError("the C simulator could not allocate its work arrays")
+    info = np.zeros((N, INFO_HEAD + 2 * n))
+    rows = np.arange(N)
+    while rows.size:  # runs that stopped for a contact mode run again with it built in
+        lib = library(system)
+        run = partial(_run_rows, lib, lib.parameters(values), t0f, index, vec)
+        info[rows] = run(np.ascontiguousarray(Y[rows]), threads)
+        wanted = [missing_mode(info[k], lib.spec.modes) for k in rows]
+        try:
+            for mode in sorted({m for m in wanted if m is not None}):
+                system.add_c_mode(mode)
+        except SimulationError:
+            break  # those rows stay stopped, with the loop's message
+        rows = rows[[m is not None for m in wanted]]
     # a run that reached t_end decodes to ("finished", "reached t_end = ...", None): only
     # the others are decoded one by one (a per-row decode would cost more than a short run)
     finished, reached = decode(_REACHED_ROW, fns.wall_names, tend)[:2]
@@ -172,6 +166,34 @@ def simulate_batch(
         steps=info_entry(info, "steps").astype(np.int64),
         messages=tuple(messages),
     )
+
+
+def _run_rows(
+    lib: CLibrary, P: np.ndarray, t0: float, index: int, vec: np.ndarray, Y: np.ndarray,
+    threads: int,
+) -> np.ndarray:  # fmt: skip
+    """The info rows of runs from the rows of ``Y``, in chunks on ``threads`` threads (more
+    chunks than threads, taken in turn: runs of unequal length balance out)."""
+    N = Y.shape[0]
+    info = np.zeros((N, lib.spec.info_size))
+    pieces = min(N, threads if threads == 1 else 8 * threads)
+    bounds = np.linspace(0, N, pieces + 1).astype(int)
+
+    def chunk(k: int) -> int:
+        lo, hi = int(bounds[k]), int(bounds[k + 1])
+        if hi <= lo:
+            return 0
+        block = np.zeros((hi - lo, info.shape[1]))
+        status = lib.batch(hi - lo, Y[lo:hi].ctypes.data, t0, index, vec.ctypes.data,
+                           P.ctypes.data, block.ctypes.data)  # fmt: skip
+        info[lo:hi] = block
+        return int(status)
+
+    with ThreadPoolExecutor(max_workers=min(threads, pieces)) as pool:
+        codes = list(pool.map(chunk, range(len(bounds) - 1)))
+    if any(codes):
+        raise MemoryError("the C simulator could not allocate its work arrays")
+    return info
 
 
 def _check_rows(

@@ -24,6 +24,7 @@ from __future__ import annotations
 import threading
 import time as _time
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 
@@ -33,12 +34,13 @@ from symmech.simulate.csim import (
     decode,
     info_entry,
     library,
+    missing_mode,
     options_vector,
 )
 from symmech.simulate.hybrid import Options
 from symmech.simulate.protocol import EVENT_KINDS, INFO_HEAD
 from symmech.simulate.result import STATUSES, EventTable, SimulationResult
-from symmech.simulate.system import HybridSystem
+from symmech.simulate.system import HybridSystem, Mode, SimulationError
 
 __all__ = ["Workspace", "run_c"]
 
@@ -171,7 +173,33 @@ def run_c(
     max_step: float,
 ) -> SimulationResult:
     """One hybrid run in the compiled C loop (arguments validated by
-    :func:`symmech.simulate.simulate`); the result has the form of the NumPy loop's."""
+    :func:`symmech.simulate.simulate`); the result has the form of the NumPy loop's.
+
+    A run that reaches a set of walls whose contact mode the library lacks stops there;
+    the mode is built in (:meth:`~symmech.simulate.system.HybridSystem.add_c_mode`) and
+    the run starts again (a run is deterministic, so the result is the one a library
+    built with every mode gives)."""
+    while True:
+        result, needed = _run_once(system, values, y0, t0, opts, method, max_step)
+        if needed is None:
+            return result
+        try:
+            system.add_c_mode(needed)
+        except SimulationError as exc:
+            return replace(result, message=str(exc))
+
+
+def _run_once(
+    system: HybridSystem,
+    values: dict[str, float],
+    y0: np.ndarray,
+    t0: float,
+    opts: Options,
+    method: str,
+    max_step: float,
+) -> tuple[SimulationResult, Mode | None]:
+    """One run with the library of the system's current contact modes, and the mode it
+    stopped for (None if none)."""
     clock = _time.perf_counter()
     lib = library(system)
     spec = lib.spec
@@ -206,6 +234,7 @@ def run_c(
     finally:
         lib.free(handle)
     info = ws.info
+    needed = missing_mode(info, spec.modes)
     status, message, accumulation = decode(info, names, opts.t_end)
     records = recs[0] if len(recs) == 1 else np.concatenate(recs)
     events = EventTable(
@@ -231,7 +260,7 @@ def run_c(
         "releases": by_kind["release"],
     }
     assert status in STATUSES
-    return SimulationResult(
+    result = SimulationResult(
         t=records[:, 0],
         q=records[:, 1 : 1 + n],
         v=records[:, 1 + n :],
@@ -243,3 +272,4 @@ def run_c(
         n=n,
         accumulation_time=accumulation,
     )
+    return result, needed

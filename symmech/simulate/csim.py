@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import ctypes
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -49,7 +49,7 @@ from symmech.simulate.protocol import (
     slot,
 )
 from symmech.simulate.steppers import ExplicitRK, c_tableau, stepper
-from symmech.simulate.system import Functions, HybridSystem, SimulationError
+from symmech.simulate.system import Functions, HybridSystem, Mode, SimulationError
 
 __all__ = [
     "C_METHODS",
@@ -83,6 +83,8 @@ class SimulatorSpec:
     constrained: int
     energy_conserved: int
     moving: tuple[int, ...]
+    #: the contact modes compiled in (mode id -> its walls) and which of them lock the body
+    modes: tuple[Mode, ...]
     locked: tuple[int, ...]
     simultaneous: tuple[int, ...]
     normal_index: int
@@ -115,13 +117,17 @@ def _call(module: Any, name: str, args: dict[str, str], offset: int) -> str:
     return f"{module.code.stem}_{name}({', '.join(out)})"
 
 
-def _locked_force_lines(system: HybridSystem, wall: int, offset: int) -> list[str]:
-    """``lambda_N`` of a locked contact
-    (:meth:`~symmech.simulate.system.HybridSystem.locked_force_expression`) printed in C."""
+def _locked_force_lines(system: HybridSystem, mode: Mode, offset: int) -> list[str]:
+    """``lambda_N`` of the wall at position ``pos`` of a locked contact mode
+    (:meth:`~symmech.simulate.system.HybridSystem.locked_force_expression`) printed in C;
+    a mode whose statics cannot be solved (indeterminate) returns -1."""
     scene = system.scene
     decl = scene.declaration
-    (expr,) = system.locked_force_expression((wall,))
-    temps, (body,) = sp.cse([expr], symbols=sp.numbered_symbols("lf"))
+    try:
+        exprs = system.locked_force_expression(mode)
+    except SimulationError:
+        return ["{ *out = NAN; return -1; }"]
+    temps, bodies = sp.cse(exprs, symbols=sp.numbered_symbols("lf"))
     names: dict[sp.Symbol, str] = {TIME: "t"}
     names.update({s: f"q[{i}]" for i, s in enumerate(decl.coordinates)})
     names.update({s: f"P[{offset + j}]" for j, s in enumerate(scene.parameters)})
@@ -129,65 +135,89 @@ def _locked_force_lines(system: HybridSystem, wall: int, offset: int) -> list[st
     printer = SymmechCPrinter(names)
     lines = ["{"]
     lines += [f"    const double {s} = {printer.doprint(e)};" for s, e in temps]
-    lines += [f"    *out = {printer.doprint(body)};", "    return 0;", "}"]
+    lines += ["    switch (pos) {"]
+    lines += [f"    case {k}: *out = {printer.doprint(b)}; return 0;" for k, b in enumerate(bodies)]
+    lines += ["    default: *out = NAN; return -1;", "    }", "}"]
     return lines
 
 
-def simulator_spec(system: HybridSystem) -> SimulatorSpec:
-    """The :class:`SimulatorSpec` of ``system`` (every static wall's contact mode is
-    generated here)."""
-    scene = system.scene
-    free = system.free
-    walls = len(scene.walls)
-    fns = Functions(system, {str(p): 1.0 for p in scene.parameters})
+@dataclass
+class _ModeCalls:
+    """The C calls of the flow modes: free flight (-1) and each compiled contact mode."""
+
+    rhs: list[tuple[int, str]] = field(default_factory=list)
+    projector: list[tuple[int, str]] = field(default_factory=list)
+    residual: list[tuple[int, int, str]] = field(default_factory=list)
+    force: list[tuple[int, list[str]]] = field(default_factory=list)
+
+
+_QV = {"q": "q", "v": "v", "y": "y", "t": "t"}
+
+
+def _add_mode(
+    calls: _ModeCalls, case: int, mod: Any, offset: int, normal: int | None, rhs: bool = True
+) -> None:
+    """The rhs (unless ``rhs`` is False), projector, residual (and, with the index of the
+    first normal multiplier, the force) calls of module ``mod`` as mode ``case``."""
+    if rhs:
+        calls.rhs.append((case, _call(mod, "rhs", {**_QV, "out": "out"}, offset)))
+    calls.projector.append((case, _call(mod, "projector_P", {**_QV, "out": "out"}, offset)))
+    size = {f.name: f.out_size for f in mod.code.functions}["constraint_residual"]
+    line = _call(mod, "constraint_residual", {**_QV, "out": "out"}, offset)
+    calls.residual.append((case, size, line))
+    if normal is not None:
+        call = _call(mod, "multipliers", {**_QV, "out": "lam"}, offset)
+        body = f"{{ int st = {call}; *out = lam[{normal} + pos]; return st; }}"
+        calls.force.append((case, [body]))
+
+
+def _wall_calls(free: Any, walls: int, moving: tuple[int, ...]) -> list[tuple[int, str]]:
+    """The calls of the walls' functions (psi, dpsi, psi_t of moving walls, impact)."""
     by_wall = {(f.kind, f.wall_index): f.name for f in free.code.functions if f.wall}
-    moving = tuple(int(m) for m in fns.moving)
-    contacts: dict[int, Any] = {w: system.contact((w,)) for w in range(walls) if not moving[w]}
-    locked = tuple(int(w in contacts and contacts[w] is None) for w in range(walls))
-    layout: list[tuple[str, ...]] = [free.parameters]
-    offsets: dict[int | None, int] = {None: 0}
-    size = len(free.parameters)
-    for w, mod in contacts.items():
-        if mod is not None:
-            offsets[w] = size
-            layout.append(mod.parameters)
-            size += len(mod.parameters)
-    scene_offset = size
-    layout.append(tuple(str(p) for p in scene.parameters))
-    qv = {"q": "q", "v": "v", "y": "y", "t": "t"}
-    rhs = [(-1, _call(free, "rhs", {**qv, "out": "out"}, 0))]
-    projector, residual, force = [], [], []
-    mass_matrix = ""
-    if fns.constrained:
-        mass_matrix = _call(free, "mass_matrix", {**qv, "out": "out"}, 0)
-        projector.append((-1, _call(free, "projector_P", {**qv, "out": "out"}, 0)))
-        r_out = {f.name: f.out_size for f in free.code.functions}["constraint_residual"]
-        residual.append((-1, r_out, _call(free, "constraint_residual", {**qv, "out": "out"}, 0)))
-    wall_calls = []
+    out = []
     for w in range(walls):
         for k, kind in enumerate(_WALL_KINDS):
             if kind == "psi_t" and not moving[w]:
                 continue
-            name = by_wall[(kind, w)]
-            wall_calls.append((k * walls + w, _call(free, name, {**qv, "out": "out"}, 0)))
-        if moving[w]:
-            continue
-        mod = contacts[w]
+            out.append((k * walls + w, _call(free, by_wall[(kind, w)], {**_QV, "out": "out"}, 0)))
+    return out
+
+
+def simulator_spec(system: HybridSystem) -> SimulatorSpec:
+    """The :class:`SimulatorSpec` of ``system`` (the contact modes of
+    :attr:`~symmech.simulate.system.HybridSystem.c_modes` are generated here)."""
+    scene = system.scene
+    free = system.free
+    walls = len(scene.walls)
+    fns = Functions(system, {str(p): 1.0 for p in scene.parameters})
+    moving = tuple(int(m) for m in fns.moving)
+    modes = system.c_modes
+    contacts = {mode: system.contact(mode) for mode in modes}
+    layout: list[tuple[str, ...]] = [free.parameters]
+    offsets: dict[Mode, int] = {}
+    size = len(free.parameters)
+    for mode, mod in contacts.items():
+        if mod is not None:
+            offsets[mode] = size
+            layout.append(mod.parameters)
+            size += len(mod.parameters)
+    scene_offset = size
+    layout.append(tuple(str(p) for p in scene.parameters))
+    calls = _ModeCalls()
+    calls.rhs.append((-1, _call(free, "rhs", {**_QV, "out": "out"}, 0)))
+    mass_matrix = ""
+    if fns.constrained:
+        mass_matrix = _call(free, "mass_matrix", {**_QV, "out": "out"}, 0)
+        _add_mode(calls, -1, free, 0, None, rhs=False)
+    m = scene.constraint_matrix.rows
+    for case, mode in enumerate(modes):
+        mod = contacts[mode]
         if mod is None:
-            force.append((w, _locked_force_lines(system, w, scene_offset)))
-            continue
-        off = offsets[w]
-        rhs.append((w, _call(mod, "rhs", {**qv, "out": "out"}, off)))
-        projector.append((w, _call(mod, "projector_P", {**qv, "out": "out"}, off)))
-        sizes = {f.name: f.out_size for f in mod.code.functions}
-        line = _call(mod, "constraint_residual", {**qv, "out": "out"}, off)
-        residual.append((w, sizes["constraint_residual"], line))
-        call = _call(mod, "multipliers", {**qv, "out": "lam"}, off)
-        force.append(
-            (w, [f"{{ int st = {call}; *out = lam[{system.normal_index((w,), w)}]; return st; }}"])
-        )
+            calls.force.append((case, _locked_force_lines(system, mode, scene_offset)))
+        else:
+            _add_mode(calls, case, mod, offsets[mode], m)
     headers = [f"{free.code.stem}.h"] + [
-        f"{m.code.stem}.h" for m in contacts.values() if m is not None
+        f"{mod.code.stem}.h" for mod in contacts.values() if mod is not None
     ]
     return SimulatorSpec(
         scene=scene.name,
@@ -198,20 +228,21 @@ def simulator_spec(system: HybridSystem) -> SimulatorSpec:
         constrained=int(fns.constrained),
         energy_conserved=int(fns.energy_conserved),
         moving=moving,
-        locked=locked,
+        modes=modes,
+        locked=tuple(int(contacts[mode] is None) for mode in modes),
         simultaneous=tuple(int(x) for x in fns.simultaneous),
-        normal_index=system.normal_index((0,), 0) if walls else 0,
+        normal_index=m,
         wall_names=fns.wall_names,
-        m=scene.constraint_matrix.rows,
+        m=m,
         has_frame=int(scene.declaration.frame is not None),
         calls={
-            "rhs": rhs,
-            "wall": wall_calls,
-            "energy": _call(free, "energy", {**qv, "out": "out"}, 0),
+            "rhs": calls.rhs,
+            "wall": _wall_calls(free, walls, moving),
+            "energy": _call(free, "energy", {**_QV, "out": "out"}, 0),
             "mass_matrix": mass_matrix,
-            "projector": projector,
-            "residual": residual,
-            "force": force,
+            "projector": calls.projector,
+            "residual": calls.residual,
+            "force": calls.force,
         },
         parameter_layout=tuple(layout),
     )
@@ -274,6 +305,8 @@ def simulator_source(system: HybridSystem) -> dict[str, str]:
             constrained=spec.constrained,
             energy_conserved=spec.energy_conserved,
             moving=spec.moving,
+            modes=spec.modes,
+            max_mode_size=max((len(mode) for mode in spec.modes), default=0),
             locked=spec.locked,
             normal_index=spec.normal_index,
             m=spec.m,
@@ -347,12 +380,24 @@ def parameter_vector(layout: Sequence[Sequence[str]], values: Mapping[str, float
 
 
 def library(system: HybridSystem) -> CLibrary:
-    """The compiled simulator of ``system``, built once and kept on the system object."""
+    """The compiled simulator of ``system`` with its current contact modes
+    (:attr:`~symmech.simulate.system.HybridSystem.c_modes`), built once per set of modes
+    and kept on the system object."""
     lib = system.__dict__.get("_c_simulator")
-    if lib is None:
+    if lib is None or lib.spec.modes != system.c_modes:
         lib = CLibrary(system)
         system.__dict__["_c_simulator"] = lib
     return lib
+
+
+def missing_mode(info: np.ndarray, modes: tuple[Mode, ...]) -> Mode | None:
+    """The contact mode a run stopped for (reason ``mode_missing``: the loop needed the
+    mode ``sub`` with wall ``wall`` added, ``why`` 1, or removed), else None."""
+    if int(info[INFO.index("reason")]) != REASONS.index("mode_missing"):
+        return None
+    wall, add, sub = (int(info[INFO.index(k)]) for k in ("wall", "why", "sub"))
+    base = set(modes[sub]) if sub >= 0 else set()
+    return tuple(sorted(base | {wall} if add else base - {wall}))
 
 
 def options_vector(
@@ -467,6 +512,8 @@ def decode(info: np.ndarray, names: tuple[str, ...], t_end: float) -> tuple[str,
             f" {d[1]:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
             None,
         )
+    if reason == "mode_missing":
+        return status, "the C loop stopped for a contact mode it was built without", None
     if reason == "call_failed":
         name = FUNCTIONS[fn][1] if 0 <= fn < len(FUNCTIONS) else "a generated function"
         return status, f"the generated function {name} failed at t = {d[0]!r}", None

@@ -40,6 +40,7 @@ REASONS = (
     "call_failed",
     "condition",
     "max_steps",
+    "mode_missing",
 )
 
 #: The kinds of events (:class:`symmech.simulate.result.Event`).

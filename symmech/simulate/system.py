@@ -48,6 +48,7 @@ from symmech.codegen.runtime_checks import real_array
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
+from symmech.simulate.impulses import MAX_SIMULTANEOUS
 
 __all__ = [
     "FREE",
@@ -250,6 +251,7 @@ class HybridSystem:
     _locked: dict[tuple[str, Mode], Any] = field(default_factory=dict, repr=False)
     _moving: tuple[bool, ...] | None = field(default=None, repr=False)
     _conserved: bool | None = field(default=None, repr=False)
+    _extra_modes: list[Mode] = field(default_factory=list, repr=False)
 
     @classmethod
     def build(
@@ -313,6 +315,27 @@ class HybridSystem:
     def has_contact_mode(self, wall: int) -> bool:
         """Whether ``wall`` is static (a moving wall has no contact mode)."""
         return TIME not in self.scene.walls[wall].psi.free_symbols
+
+    @property
+    def c_modes(self) -> tuple[Mode, ...]:
+        """The contact modes the C simulator library holds: each static wall alone, then
+        every set the loop has asked for (:meth:`add_c_mode`), in the order added."""
+        singles = tuple((w,) for w in range(len(self.scene.walls)) if self.has_contact_mode(w))
+        return singles + tuple(self._extra_modes)
+
+    def add_c_mode(self, mode: Mode) -> None:
+        """Build the contact mode ``mode`` into the C library from now on (the library is
+        rebuilt on its next use: :func:`symmech.simulate.csim.library`)."""
+        mode = tuple(sorted(mode))
+        if mode in self.c_modes:
+            return
+        if len(mode) > MAX_SIMULTANEOUS:
+            names = [self.scene.walls[w].name for w in mode]
+            raise SimulationError(
+                f"contact with {len(mode)} walls at once {names}: the C loop holds at most"
+                f" {MAX_SIMULTANEOUS} (backend='numpy' has no such limit)"
+            )
+        self._extra_modes.append(mode)
 
     def contact(self, mode: Mode) -> SceneModule | None:
         """The loaded module of the contact mode ``mode`` (generated on first use); None

@@ -47,14 +47,22 @@
 /* statuses, reasons, event kinds, functions, options and info entries: the tables of
    symmech/simulate/protocol.py, numbered in order */
 enum { ST_RUNNING, ST_FINISHED, ST_ZENO, ST_MAX_EVENTS, ST_FAILED, ST_MAX_STEPS, ST_COUNT };
-enum { R_NONE, R_END, R_MAX_EVENTS, R_SEQUENTIAL, R_ACCUMULATION, R_REST, R_RHS_NONFINITE, R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION, R_MAX_STEPS, R_COUNT };
+enum { R_NONE, R_END, R_MAX_EVENTS, R_SEQUENTIAL, R_ACCUMULATION, R_REST, R_RHS_NONFINITE, R_STEP_SMALL, R_FIXED_NONFINITE, R_CALL_FAILED, R_CONDITION, R_MAX_STEPS, R_MODE_MISSING, R_COUNT };
 enum { K_IMPACT, K_GRAZING, K_CONTACT, K_RELEASE, K_COUNT };
 enum { F_PSI, F_DPSI, F_PSI_T, F_IMPACT, F_ENERGY, F_PROJECT, F_RESIDUAL, F_FORCE, F_COUNT };
 enum { OPT_RTOL, OPT_ATOL, OPT_MAX_STEP, OPT_FIXED_STEP, OPT_T_END, OPT_ZENO_FACTOR, OPT_MAX_EVENTS, OPT_CONTACT_STOP, OPT_SAMPLES, OPT_MAX_STEPS, OPT_SEQUENTIAL, OPT_COUNT };
 enum { I_STATUS, I_REASON, I_WALL, I_WHY, I_SUB, I_FUNCTION, I_MODE, I_D0, I_D1, I_D2, I_D3, I_STEPS, I_REJECTED_STEPS, I_RHS_CALLS, I_CONSTRAINT_DRIFT, I_ENERGY_DRIFT, I_EVENTS, I_IMPACTS, I_GRAZING, I_CONTACTS, I_RELEASES, I_LAST_T, I_IMPACT_CONDITION, I_COUNT };
 
 static const int moving[NW] = { 0 };
-static const int locked[NW] = { 1 };
+/* the contact modes compiled in: mode id -> its walls (sorted), locked or not
+   (symmech.simulate.system.HybridSystem.c_modes); -1 is free flight */
+#define NMODE 1
+#define MAXK 1
+static const int mode_size[NMODE > 0 ? NMODE : 1] = { 1 };
+static const int mode_walls[NMODE > 0 ? NMODE : 1][MAXK > 0 ? MAXK : 1] = {
+    { 0 },
+};
+static const int locked[NMODE > 0 ? NMODE : 1] = { 1 };
 /* the walls with a Newton direction (symmech.simulate.system.simultaneous_walls) */
 static const int simultaneous[NW] = { 1 };
 
@@ -139,8 +147,9 @@ static int call_rhs(const sim_t *s, int mode, double t, const double *y, double 
     }
 }
 
-/* lambda_N of the contact mode of wall w (the normal multiplier, entry 0) */
-static int call_force(const sim_t *s, int w, double t, const double *q, const double *v, double *lam, double *out)
+/* lambda_N of the wall at position pos of contact mode `mode` (its normal multiplier,
+   entry 0 + pos; a locked mode: from the statics) */
+static int call_force(const sim_t *s, int mode, int pos, double t, const double *q, const double *v, double *lam, double *out)
 {
     const double *P = s->P;
     (void)P;
@@ -148,11 +157,14 @@ static int call_force(const sim_t *s, int w, double t, const double *q, const do
     (void)q;
     (void)v;
     (void)lam;
-    switch (w) {
+    (void)pos;
+    switch (mode) {
     case 0:
         {
-            *out = P[4]*P[5];
-            return 0;
+            switch (pos) {
+            case 0: *out = P[4]*P[5]; return 0;
+            default: *out = NAN; return -1;
+            }
         }
     default: *out = NAN; return -1;
     }
@@ -227,7 +239,7 @@ static void fail_call(sim_t *s, int function)
 
 static int locked_mode(int mode)
 {
-    return mode >= 0 && locked[mode];
+    return mode >= 0 && mode < NMODE && locked[mode];
 }
 
 /* rhs(mode, t, y): zeros for a locked contact, NaN when the generated call fails */
@@ -601,10 +613,72 @@ static double normal_rate(sim_t *s, int w, double t, const double *y)
     return rate(s, w, t, y, s->w3);
 }
 
-static double normal_force(sim_t *s, int w, double t, const double *q, const double *v)
+/* whether wall w is held in mode `mode` (its position, or -1) */
+static int mode_pos(int mode, int w)
+{
+    if (mode < 0) return -1;
+    for (int k = 0; k < mode_size[mode]; ++k)
+        if (mode_walls[mode][k] == w) return k;
+    return -1;
+}
+
+static int in_mode(int mode, int w)
+{
+    return mode_pos(mode, w) >= 0;
+}
+
+/* the id of the mode holding exactly the sorted walls[0..k-1]: -1 for none held, -2
+   when that mode is not compiled in */
+static int find_mode(const int *walls, int k)
+{
+    if (k == 0) return -1;
+    for (int id = 0; id < NMODE; ++id) {
+        if (mode_size[id] != k) continue;
+        int same = 1;
+        for (int j = 0; j < k; ++j) same &= mode_walls[id][j] == walls[j];
+        if (same) return id;
+    }
+    return -2;
+}
+
+/* a mode the loop needs and the library lacks: the run stops with R_MODE_MISSING and the
+   caller (symmech.simulate.c_run) builds it in and runs again (why: 1 add w, 0 remove w) */
+static int mode_missing(sim_t *s, int mode, int w, int add)
+{
+    if (s->status == ST_RUNNING) {
+        s->stop_wall = w;
+        s->sub = mode;
+        s->why = add;
+        s->d[0] = s->t;
+        stop(s, ST_FAILED, R_MODE_MISSING);
+    }
+    return -2;
+}
+
+/* the mode `mode` with wall w added (add) or removed; -2 (and the run stopped) when the
+   library lacks it */
+static int mode_change(sim_t *s, int mode, int w, int add)
+{
+    int walls[MAXK + 1], k = 0;
+    for (int j = 0; mode >= 0 && j < mode_size[mode]; ++j)
+        if (mode_walls[mode][j] != w) walls[k++] = mode_walls[mode][j];
+    if (add) {
+        if (k == MAXK) return mode_missing(s, mode, w, add);
+        int at = k;
+        while (at > 0 && walls[at - 1] > w) { walls[at] = walls[at - 1]; --at; }
+        walls[at] = w;
+        ++k;
+    }
+    int id = find_mode(walls, k);
+    return id == -2 ? mode_missing(s, mode, w, add) : id;
+}
+
+static double normal_force(sim_t *s, int mode, int w, double t, const double *q, const double *v)
 {
     double lam[NQ + NW + 1], out;
-    if (call_force(s, w, t, q, v, lam, &out) != 0) { fail_call(s, F_FORCE); return NAN; }
+    int pos = mode_pos(mode, w);
+    if (pos < 0) return NAN;
+    if (call_force(s, mode, pos, t, q, v, lam, &out) != 0) { fail_call(s, F_FORCE); return NAN; }
     return out;
 }
 
@@ -681,9 +755,11 @@ static double free_psi_acceleration(sim_t *s, int w, const double *y)
 static double push_force(sim_t *s, int w, const double *y)
 {
     if (moving[w]) return -free_psi_acceleration(s, w, y);
+    int mode = mode_change(s, s->mode, w, 1);
+    if (mode == -2) return NAN;
     double v[NQ];
-    project(s, w, s->t, y, y + NQ, v);
-    return normal_force(s, w, s->t, y, v);
+    project(s, mode, s->t, y, y + NQ, v);
+    return normal_force(s, mode, w, s->t, y, v);
 }
 
 /* whether the wall would have to push to keep the body out (lambda_N > 0) */
@@ -736,7 +812,7 @@ static const double *state_at(sim_t *s, double t, double *buf)
 static double fvalue(sim_t *s, const funcs_t *F, int i, double t, const double *y)
 {
     int w = F->wall[i];
-    if (F->release[i]) return normal_force(s, w, t, y, y + NQ);
+    if (F->release[i]) return normal_force(s, s->mode, w, t, y, y + NQ);
     double g = psi(s, w, t, y);
     if (F->band[i]) g = g + s->tol_psi;
     return F->divided[i] ? g / (t - F->t0) : g;
@@ -810,7 +886,7 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
     F.nf = 0;
     F.t0 = s->st0;
     for (int w = 0; w < NW; ++w) {
-        if (w == s->mode) continue;
+        if (in_mode(s->mode, w)) continue;
         F.wall[F.nf] = w;
         F.release[F.nf] = 0;
         /* hybrid._Run.detect: divided gap for a wall touched and left at the start, psi
@@ -828,12 +904,13 @@ static int detect(sim_t *s, double *te, int *wall, int *release)
         else F.start[F.nf] = g0;
         F.nf++;
     }
-    if (s->mode >= 0) {
-        F.wall[F.nf] = s->mode;
+    for (int j = 0; s->mode >= 0 && j < mode_size[s->mode]; ++j) {
+        int w = mode_walls[s->mode][j];
+        F.wall[F.nf] = w;
         F.release[F.nf] = 1;
         F.divided[F.nf] = 0;
         F.band[F.nf] = 0;
-        F.start[F.nf] = normal_force(s, s->mode, F.t0, s->y0s, s->y0s + NQ);
+        F.start[F.nf] = normal_force(s, s->mode, w, F.t0, s->y0s, s->y0s + NQ);
         F.nf++;
     }
     if (F.nf == 0) return 0;
@@ -898,7 +975,7 @@ static int approaching(sim_t *s, double *rbest)
     double tv = tol_v(s, s->y);
     int best = -1;
     for (int w = 0; w < NW; ++w) {
-        if (w == s->mode || psi(s, w, s->t, s->y) > s->tol_psi) continue;
+        if (in_mode(s->mode, w) || psi(s, w, s->t, s->y) > s->tol_psi) continue;
         double r = normal_rate(s, w, s->t, s->y);
         if (r < -tv && (best < 0 || r < *rbest)) {
             best = w;
@@ -908,18 +985,29 @@ static int approaching(sim_t *s, double *rbest)
     return best;
 }
 
-/* project onto the mode's constraints (psi = 0 in contact, then P v); drift if asked */
+static int solve_small(int k, const double *A, const double *b, double *x);
+
+/* project onto the mode's constraints: every held psi = 0 (two Gauss-Newton steps
+   q -= G^T (G G^T)^-1 psi), then P v; drift if asked (hybrid._Run.stabilise) */
 static void stabilise(sim_t *s, int mode, double *y, int drift)
 {
-    if (mode >= 0) {
-        double g[NQ];
-        for (int it = 0; it < 2; ++it) {
-            double p = psi(s, mode, s->t, y), gg = 0.0;
-            if (call_wall(s, F_DPSI, mode, s->t, y, y, g) != 0) { fail_call(s, F_DPSI); return; }
-            for (int i = 0; i < NQ; ++i) gg += g[i] * g[i];
-            if (gg == 0) break;
-            for (int i = 0; i < NQ; ++i) y[i] = y[i] - p * g[i] / gg;
+    int k = mode >= 0 ? mode_size[mode] : 0;
+    for (int it = 0; k > 0 && it < 2; ++it) {
+        double G[MAX_SIM][NQ], p[MAX_SIM], GG[MAX_SIM * MAX_SIM], z[MAX_SIM];
+        for (int a = 0; a < k; ++a) {
+            int w = mode_walls[mode][a];
+            p[a] = psi(s, w, s->t, y);
+            if (call_wall(s, F_DPSI, w, s->t, y, y, G[a]) != 0) { fail_call(s, F_DPSI); return; }
         }
+        for (int a = 0; a < k; ++a)
+            for (int b = 0; b < k; ++b) {
+                double acc = 0.0;
+                for (int i = 0; i < NQ; ++i) acc += G[a][i] * G[b][i];
+                GG[a * MAX_SIM + b] = acc;
+            }
+        if (solve_small(k, GG, p, z) != 0) break;
+        for (int a = 0; a < k; ++a)
+            for (int i = 0; i < NQ; ++i) y[i] = y[i] - z[a] * G[a][i];
     }
     if (drift) {
         double r = residual(s, mode, s->t, y, y + NQ);
@@ -928,24 +1016,72 @@ static void stabilise(sim_t *s, int mode, double *y, int drift)
     project(s, mode, s->t, y, y + NQ, y + NQ);
 }
 
-static int enter_contact(sim_t *s, int w, double r, int why_here, double estimate)
+/* let wall w go, the others held; banded until the body leaves it (hybrid._Run.release) */
+static int release_wall(sim_t *s, int w)
 {
-    if (moving[w] || s->contact_stop || s->mode >= 0) {
-        s->stop_wall = w;
-        s->sub = why_here;
-        s->why = s->contact_stop ? 0 : moving[w] ? 1 : 2;
-        s->d[0] = s->t;
-        s->d[1] = estimate;
-        s->d[2] = s->t;
-        return stop(s, ST_ZENO, R_REST);
+    if (event(s, K_RELEASE, w, s->y, s->y, 0.0)) return 1;
+    int mode = mode_change(s, s->mode, w, 0);
+    if (mode == -2) return 1;
+    s->mode = mode;
+    s->banded[w] = 1;
+    return 0;
+}
+
+/* release, one at a time (the most negative first), the held walls whose force is
+   negative (hybrid._Run.settle) */
+static int settle(sim_t *s)
+{
+    for (int round = 0; s->mode >= 0 && round < MAXK; ++round) {
+        int worst = -1;
+        double fmin = 0.0;
+        for (int j = 0; j < mode_size[s->mode]; ++j) {
+            int w = mode_walls[s->mode][j];
+            double f = normal_force(s, s->mode, w, s->t, s->y, s->y + NQ);
+            if (s->status != ST_RUNNING) return 1;
+            if (worst < 0 || f < fmin) { worst = w; fmin = f; }
+        }
+        if (!(fmin < 0)) return 0;
+        if (release_wall(s, worst)) return 1;
+    }
+    return s->status != ST_RUNNING;
+}
+
+/* hold the walls (with their normal rates) with those already held: the velocity projected
+   onto the new mode, one contact event per wall, the first with the energy change; then
+   settle (hybrid._Run.enter_contacts) */
+static int enter_contacts(sim_t *s, const int *walls, const double *rates, int n, int why_here,
+                          double estimate)
+{
+    for (int j = 0; j < n; ++j) {
+        int w = walls[j];
+        if (moving[w] || s->contact_stop) {
+            s->stop_wall = w;
+            s->sub = why_here;
+            s->why = s->contact_stop ? 0 : 1;
+            s->d[0] = s->t;
+            s->d[1] = estimate;
+            s->d[2] = s->t;
+            return stop(s, ST_ZENO, R_REST);
+        }
+    }
+    int mode = s->mode;
+    for (int j = 0; j < n; ++j) {
+        mode = mode_change(s, mode, walls[j], 1);
+        if (mode == -2) return 1;
     }
     double yp[NY];
     memcpy(yp, s->y, sizeof yp);
-    stabilise(s, w, yp, 0);
-    if (event(s, K_CONTACT, w, s->y, yp, r)) return 1;
+    stabilise(s, mode, yp, 0);
+    for (int j = 0; j < n; ++j)
+        if (event_counted(s, K_CONTACT, walls[j], s->y, yp, rates[j], j == 0)) return 1;
     memcpy(s->y, yp, sizeof yp);
-    s->mode = w;
-    return 0;
+    s->mode = mode;
+    return settle(s);
+}
+
+static int enter_contact(sim_t *s, int w, double r, int why_here, double estimate)
+{
+    return enter_contacts(s, &w, &r, 1, why_here, estimate);
 }
 
 /* the rebound speed below which impacts accumulate (hybrid._Run.zeno_speed) */
@@ -959,10 +1095,24 @@ static double zeno_speed(sim_t *s, int w, const double *y)
     return by_tol > by_res ? by_tol : by_res;
 }
 
-static int check_accumulation(sim_t *s, int w)
+/* the walls just hit whose impacts accumulate are held, together
+   (hybrid._Run.check_accumulation) */
+static int check_accumulation(sim_t *s, const int *hit, int nhit)
 {
-    double rebound = normal_rate(s, w, s->t, s->y);
-    if (rebound > zeno_speed(s, w, s->y) || !needs_push(s, w, s->y)) return 0;
+    int held[NW], nheld = 0;
+    double rebounds[NW];
+    for (int j = 0; j < nhit; ++j) {
+        int w = hit[j];
+        double rebound = normal_rate(s, w, s->t, s->y);
+        if (rebound <= zeno_speed(s, w, s->y) && needs_push(s, w, s->y)) {
+            held[nheld] = w;
+            rebounds[nheld++] = rebound;
+        }
+        if (s->status != ST_RUNNING) return 1;
+    }
+    if (nheld == 0) return 0;
+    int w = held[0];
+    double rebound = rebounds[0];
     double estimate = s->t;
     if (s->nhist[w] >= 3) {
         double d1 = s->hist[w][2] - s->hist[w][1], d0 = s->hist[w][1] - s->hist[w][0];
@@ -971,9 +1121,13 @@ static int check_accumulation(sim_t *s, int w)
             estimate = s->t + d1 * rho / (1 - rho);
         }
     }
-    if (s->contact_stop || moving[w] || s->mode >= 0) {
+    int mover = -1;
+    for (int j = 0; j < nheld; ++j)
+        if (moving[held[j]] && mover < 0) mover = j;
+    if (s->contact_stop || mover >= 0) {
+        if (mover >= 0 && !s->contact_stop) { w = held[mover]; rebound = rebounds[mover]; }
         s->stop_wall = w;
-        s->why = s->contact_stop ? 0 : moving[w] ? 1 : 2;
+        s->why = s->contact_stop ? 0 : 1;
         s->sub = s->mode;
         s->d[0] = estimate;
         s->d[1] = s->t;
@@ -981,7 +1135,7 @@ static int check_accumulation(sim_t *s, int w)
         s->d[3] = estimate;
         return stop(s, ST_ZENO, R_ACCUMULATION);
     }
-    return enter_contact(s, w, rebound, 1, estimate);
+    return enter_contacts(s, held, rebounds, nheld, 1, estimate);
 }
 
 /* walls at contact whose normal rate is below the rounding level: bodies touching and
@@ -990,7 +1144,7 @@ static void band_touching(sim_t *s)
 {
     double level = creep_floor(s->y);
     for (int w = 0; w < NW; ++w) {
-        if (w == s->mode || fabs(psi(s, w, s->t, s->y)) > s->tol_psi) continue;
+        if (in_mode(s->mode, w) || fabs(psi(s, w, s->t, s->y)) > s->tol_psi) continue;
         if (fabs(normal_rate(s, w, s->t, s->y)) <= level) {
             s->banded[w] = 1;
             s->grazing[w] = 0;
@@ -1122,7 +1276,7 @@ static int approaching_walls(sim_t *s, int *walls, double *rates)
     double tv = tol_v(s, s->y);
     int n = 0;
     for (int w = 0; w < NW; ++w) {
-        if (w == s->mode || psi(s, w, s->t, s->y) > s->tol_psi) continue;
+        if (in_mode(s->mode, w) || psi(s, w, s->t, s->y) > s->tol_psi) continue;
         double r = normal_rate(s, w, s->t, s->y);
         if (r < -tv) {
             walls[n] = w;
@@ -1217,8 +1371,7 @@ static int impacts(sim_t *s, int first, double r)
     }
     band_touching(s);
     if (s->status != ST_RUNNING) return 1;
-    for (int j = 0; j < nhit; ++j)
-        if (check_accumulation(s, hit[j])) return 1;
+    if (check_accumulation(s, hit, nhit)) return 1;
     return s->status != ST_RUNNING;
 }
 
@@ -1250,7 +1403,7 @@ static int start(sim_t *s)
     int w = approaching(s, &r);
     if (w >= 0 && impacts(s, w, r)) return 1;
     for (w = 0; w < NW; ++w) {
-        if (s->mode < 0 && fabs(psi(s, w, s->t, s->y)) <= s->tol_psi) {
+        if (!in_mode(s->mode, w) && fabs(psi(s, w, s->t, s->y)) <= s->tol_psi) {
             r = normal_rate(s, w, s->t, s->y);
             if (fabs(r) <= tol_v(s, s->y) && needs_push(s, w, s->y))
                 if (enter_contact(s, w, r, 2, s->t)) return 1;
@@ -1321,9 +1474,7 @@ static int run(sim_t *s)
         memcpy(s->y, s->ye, NY * sizeof(double));
         record(s);
         if (release) {
-            if (event(s, K_RELEASE, wall, s->y, s->y, 0.0)) return 0;
-            s->mode = -1;
-            s->banded[wall] = 1;
+            if (release_wall(s, wall) || settle(s)) return 0;
         } else if (at_wall(s, wall)) {
             return 0;
         }
