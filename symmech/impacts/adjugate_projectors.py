@@ -6,7 +6,8 @@ trigonometric terms that alone took minutes.  Here every inverse is a closed for
 ``adj(M) / det(M)`` computed in the polynomial ring R of K, where nothing is cancelled
 on the way, and each object of the Carnot paper (002) is assembled as a polynomial
 matrix over one shared polynomial denominator.  With the input denominators cleared
-(``g = Gr / gamma``, ``mu`` and ``A = [dpsi; nu]`` row by row, ``A = Lambda^{-1} Ar``; P,
+(``g = Gr / gamma``, ``mu`` and ``A = [dpsi; nu]`` row by row (``dpsi`` may stack several
+walls' rows; ``N``, ``T~``, ``Q~`` are those of its first row), ``A = Lambda^{-1} Ar``; P,
 QQ, T~, Q~ do not depend on the scale of the rows, and Lambda is put back into Y,
 P(Y^A), C^AB, C_AB, beta^B and N):
 
@@ -19,8 +20,9 @@ P(Y^A), C^AB, C_AB, beta^B and N):
 * ``P(Y^A) = gamma Pg Ar^T Lambda^{-1} / d1``, ``beta = Lambda^{-1} Ar Pg Gr / d1`` and
   ``C^{AB} = gamma Lambda^{-1} Cn Lambda^{-1} / d1`` with ``Cn = Ar Pg Ar^T``;
 * ``C_{AB} = Lambda Ka Lambda / (gamma dK)`` with ``dK = det Cn / d1^(k-1)`` and
-  ``Ka = d1 adj(Cn) / d1^(k-1)`` (k = l + 1).  Both divisions are exact: by Jacobi's
-  theorem a j x j minor of the adjugate ``Pg`` is ``d1^(j-1)`` times a minor of B1, so
+  ``Ka = d1 adj(Cn) / d1^(k-1)`` (k the rows of A: l + 1 for one wall).  Both divisions
+  are exact: by Jacobi's theorem a j x j minor of the adjugate ``Pg`` is ``d1^(j-1)``
+  times a minor of B1, so
   ``dK = (-1)^k det[[B1, [Ar^T; 0]], [[Ar, 0], 0]]``;
 * ``QQ = Pg Ar^T Ka Ar Pg Gr / (d1^2 dK)``, ``N = lambda_0 Pg Ar^T Ka e_0 / (d1 dK)``,
   ``T~ = N beta^0``, ``Q~ = Pg Ar_0^T Ar_0 Pg Gr / (d1 Cn_00)``; a spurious factor d1 of
@@ -176,7 +178,7 @@ class _Core:
     def __init__(self, field: RationalField, g, mu, dpsi, nu):
         K = field.K
         self.field, self.K, self.R = field, K, K.get_ring()
-        n, m, k = g.rows, mu.rows, 1 + nu.rows
+        n, m, k = g.rows, mu.rows, dpsi.rows + nu.rows
         self.n, self.m, self.k = n, m, k
         gamma_s, Gr = field.matrix(g).clear_denoms(convert=True)
         self.gamma = gamma_s.element

@@ -6,7 +6,10 @@ quasi-velocities v with ``q_dot = S v``); a matrix acts on velocity columns.  In
 * ``g`` (n x n), the metric in the velocity basis, ``T = 1/2 v^T g v``;
 * ``mu`` (m x n), permanent constraints ``mu v = 0``, with the projectors (P, Q) onto
   D = ker mu and D^perp (:func:`symmech.constraints.projectors.projectors`);
-* ``dpsi`` (1 x n), the wall one-form ``d psi`` in the velocity basis: ``(d psi/d q) S``;
+* ``dpsi`` (1 x n), the wall one-form ``d psi`` in the velocity basis: ``(d psi/d q) S``
+  (or w x n, the one-forms of w walls hit at once, :mod:`symmech.impacts.several`: then
+  A, C, K, beta, QQ and PP are those of all the rows, while T~, N, Q~ and P~ are built
+  from the first row only);
 * ``nu`` (l x n), the instantaneous (impulsive) constraints nu^A, A = 1..l.
 
 With ``A = [dpsi; nu]`` ((l+1) x n) the paper's objects are
