@@ -46,8 +46,11 @@ def _point(scene: Scene, rng: random.Random) -> dict:
     return point
 
 
-def _kkt(scene: Scene, names: list[str], point: dict, v_minus: np.ndarray) -> np.ndarray:
-    """v+ from the impulse-momentum equations (Carnot paper eqs. 6, 9, 15, 19, 20)."""
+def _kkt(
+    scene: Scene, names: list[str], point: dict, v_minus: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """v+ and the multipliers of the walls' rows and their impulsive constraints, from the
+    impulse-momentum equations (Carnot paper eqs. 6, 9, 15, 19, 20)."""
     decl = scene.declaration
     n = decl.n
     S = sp.eye(n) if decl.frame is None else sp.Matrix(decl.frame)
@@ -80,7 +83,8 @@ def _kkt(scene: Scene, names: list[str], point: dict, v_minus: np.ndarray) -> np
     A = np.array(rows).reshape(len(rows), n)
     big = np.block([[g, -A.T], [A, np.zeros((len(rows), len(rows)))]])
     sol = np.linalg.solve(big, np.concatenate([g @ v_minus, rhs]))
-    return sol[:n]
+    m_rows = decl.constraint_matrix.rows
+    return sol[:n], sol[n + m_rows :]  # v+ and the multipliers of the walls and the nu
 
 
 def _in_D(scene: Scene, point: dict, v: np.ndarray) -> np.ndarray:
@@ -94,18 +98,27 @@ def _in_D(scene: Scene, point: dict, v: np.ndarray) -> np.ndarray:
     return v - gi_mu @ np.linalg.solve(mu @ gi_mu, mu @ v)
 
 
-def _map_at(M, point: dict, v_minus: np.ndarray) -> np.ndarray:
+def _map_at(M, point: dict, v_minus: np.ndarray, what: str = "post_velocity") -> np.ndarray:
     rule = dict(zip(M.velocities, [sp.Float(x) for x in v_minus], strict=True))
-    return np.array([_value(e.xreplace(rule), point) for e in M.post_velocity])
+    return np.array([_value(e.xreplace(rule), point) for e in getattr(M, what)])
 
 
-def _against_kkt(scene: Scene, names: list[str], samples: int = 4, seed: int = 5) -> None:
-    M = scene.impact_map(names)
+def _against_kkt(
+    scene: Scene, names: list[str], samples: int = 4, seed: int = 5, simplify: str = "light"
+) -> None:
+    if simplify == "light":
+        M = scene.impact_map(names)
+    else:
+        M = derive_several_impact_map(scene.declaration, names, simplify=simplify)
     rng = random.Random(seed)
     for _ in range(samples):
         point = _point(scene, rng)
         v = _in_D(scene, point, np.array([rng.uniform(-2, 2) for _ in range(scene.n)]))
-        np.testing.assert_allclose(_map_at(M, point, v), _kkt(scene, names, point, v), atol=1e-9)
+        v_plus, multipliers = _kkt(scene, names, point, v)
+        np.testing.assert_allclose(_map_at(M, point, v), v_plus, atol=1e-9)
+        np.testing.assert_allclose(_map_at(M, point, v, "multipliers"), multipliers, atol=1e-9)
+        k = len(names)
+        np.testing.assert_allclose(_map_at(M, point, v, "impulses"), multipliers[:k], atol=1e-9)
 
 
 # ---------------------------------------------------------------------------------------
@@ -285,6 +298,74 @@ def test_knife_edge_scene_with_two_walls_against_kkt():
     )
     _against_kkt(scene, ["front", "lift"])
     assert scene.impact_map(["front", "lift"]).carnot().holds
+
+
+def test_every_route_of_the_projectors_against_kkt():
+    """The sympy route (simplify="none"), the rational route (every entry a number) and
+    the adjugate route (the tests above) build the same map."""
+    x, y, th, z, w = coordinates("x y theta z w")
+    xd, yd, thd, zd, _ = velocities((x, y, th, z, w))
+    metric = sp.Matrix(5, 5, lambda i, j: 3 if i == j else (1 if abs(i - j) == 1 else 0))
+    numeric = Scene(
+        (x, y, th, z, w),
+        metric=metric,
+        constraints=[xd - yd + thd],
+        walls=[
+            Wall(x + 2 * y + w, restitution=sp.Rational(1, 3), name="a"),
+            Wall(y - th, restitution=sp.Rational(2, 3), impulsive_constraints=[zd], name="b"),
+        ],
+        name="numeric",
+    )
+    _against_kkt(numeric, ["a", "b"], samples=2)
+    assert numeric.impact_map(["a", "b"]).projectors.denominators is None  # rational route
+    _against_kkt(_rod(sp.Rational(3, 10)), ["endA", "endB"], samples=2, simplify="none")
+    _against_kkt(_rod(sp.Rational(3, 10)), ["endA", "endB"], samples=1, simplify="full")
+
+
+def test_delassus_with_impulsive_constraints_is_the_doubly_constrained_inverse():
+    """W = G M^-1 G^T with M^-1 the inverse constrained by mu and the set's nu (numeric,
+    from g, mu, nu and the walls' one-forms at random states)."""
+    x, y, ph, s = coordinates("x y phi s")
+    xd, _, phd, sd = velocities((x, y, ph, s))
+    scene = Scene(
+        (x, y, ph, s),
+        metric=sp.Matrix([[m, 0, 0, 1], [0, m, 0, 0], [0, 0, I, 0], [1, 0, 0, 3]]),
+        constraints=[sd - xd - phd],
+        walls=[
+            Wall(
+                y - R * sp.cos(ph),
+                restitution=HALF,
+                impulsive_constraints=[xd + R * phd],
+                name="floor",
+            ),
+            Wall(x + y - R, restitution=1, name="side"),
+        ],
+        name="delassus",
+    )
+    M = scene.impact_map(["floor", "side"])
+    rng = random.Random(3)
+    decl = scene.declaration
+    for _ in range(3):
+        point = _point(scene, rng)
+        g = np.array(sp.Matrix(decl.metric).xreplace(point), dtype=float)
+        B = np.array(
+            sp.Matrix(decl.constraint_matrix)
+            .col_join(sp.Matrix(scene.wall("floor").impulsive_matrix))
+            .xreplace(point),
+            dtype=float,
+        )
+        G = np.array(
+            sp.Matrix(
+                [[sp.diff(w.psi, q) for q in decl.coordinates] for w in scene.walls]
+            ).xreplace(point),
+            dtype=float,
+        )
+        gi = np.linalg.inv(g)
+        constrained = gi - gi @ B.T @ np.linalg.solve(B @ gi @ B.T, B @ gi)
+        expected = G @ constrained @ G.T
+        np.testing.assert_allclose(
+            np.array(M.delassus.xreplace(point), dtype=float), expected, rtol=1e-10
+        )
 
 
 def test_rough_floor_and_side_wall_with_impulsive_constraint_against_kkt():

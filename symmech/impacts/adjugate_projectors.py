@@ -154,18 +154,22 @@ def adjugate_route(
     nu: sp.Matrix,
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
     cancel: bool = True,
-) -> tuple[dict[str, sp.Matrix], Denominators] | None:
+    several: bool = False,
+) -> tuple[dict[str, Any], Denominators] | None:
     """The objects of :class:`~symmech.impacts.impact_projectors.ImpactProjectors` other
     than P and Q (a dict keyed by the attribute names) and the shared denominators, by the
     formulas of the module docstring; ``None`` when the field is not a rational-function
     field or the term budget is exceeded.  ``check(C, PY)`` is called before C^AB is
     inverted.  With ``cancel=False`` no gcd is taken at all (the entries as the formulas
-    build them)."""
+    build them).  With ``several=True`` also ``PYK``, ``Kbeta`` and ``T_walls`` (see
+    :class:`~symmech.impacts.impact_projectors.ImpactProjectors`): ``PY K = Pg Ar^T Ka
+    Lambda / (d1 dK)``, ``K beta = Lambda Ka betan / (gamma dK d1)`` and
+    ``T~_i`` (column i of PYK times ``beta^i``) over QQ's denominator, as T~ is."""
     K = field.K
     if K is None or not K.is_FractionField:
         return None
     try:
-        return _route(field, g, mu, dpsi, nu, check, cancel)
+        return _route(field, g, mu, dpsi, nu, check, cancel, several)
     except BudgetExceeded as exc:
         limits.propagate_time(exc)
         return None
@@ -250,7 +254,7 @@ def shared_denominators(
         return None
 
 
-def _route(field, g, mu, dpsi, nu, check, cancel):
+def _route(field, g, mu, dpsi, nu, check, cancel, several=False):
     core = _Core(field, g, mu, dpsi, nu)
     Fd, n, k, zero = core.K.field, core.n, core.k, core.R.zero
     gamma, lam, d1, dG = core.gamma, core.lam, core.d1, core.dG
@@ -315,4 +319,20 @@ def _route(field, g, mu, dpsi, nu, check, cancel):
         "N": to_sympy(N),
     }
 
+    if several:
+        gamma_dK_d1 = gamma * dK * d1
+        Kbn = (Ka * betan).to_list()
+        objects["PYK"] = to_sympy(
+            [[frac(lam[a] * PYKl[i][a], den_pyk) for a in range(k)] for i in range(n)]
+        )
+        objects["Kbeta"] = to_sympy(
+            [[frac(lam[a] * Kbn[a][j], gamma_dK_d1) for j in range(n)] for a in range(k)]
+        )
+        walls = []
+        for w in range(dpsi.rows):
+            Tw = PYK.extract(list(range(n)), [w]) * betan.extract([w], list(range(n)))
+            _guard(Tw)
+            Twl = Tw.to_list()
+            walls.append(to_sympy([[frac(Twl[i][j], den_qq) for j in range(n)] for i in range(n)]))
+        objects["T_walls"] = tuple(walls)
     return objects, core.denominators(dK)

@@ -510,7 +510,7 @@ def derive_several_impact_map(
     check = _regularity_check(resolved, rows, points)
     permanent = projectors if level != "none" else None
     g, mu = sp.Matrix(declaration.metric), sp.Matrix(declaration.constraint_matrix)
-    proj = impact_projectors(g, mu, dpsi, nu, level, check=check, permanent=permanent)
+    proj = impact_projectors(g, mu, dpsi, nu, level, check=check, permanent=permanent, several=True)
     c, given = _wall_rates(declaration, resolved, forms, proj, points, level)
     alphas = tuple(f[1] for f in forms)
     return SeveralImpactMap(
@@ -546,19 +546,27 @@ def _closed_form(
     simplify: Level,
     state: tuple[sp.Symbol, ...],
 ) -> dict[str, sp.Matrix]:
-    """``matrix = PP - PY K D beta``, ``offset = PY K (I + D) c``, ``W = PY K c`` and the
-    impulses ``Lambda = -K (I + D) beta v- + K (I + D) c`` (module docstring), each entry
-    in the stable form of :mod:`symmech.algebra.stability` unless ``simplify="none"``."""
+    """``matrix = PP - sum_i alpha_i T~_i`` (``= PP - PY K D beta``), ``offset = PY K (I + D)
+    c``, ``W = PY K c`` and the impulses ``Lambda = -(K beta + K D beta) v- + K (I + D) c``
+    (module docstring; ``K D beta = sum_i alpha_i K[:, i] beta^i``), from the projectors'
+    ``T_walls``, ``PYK`` and ``Kbeta``, built by the route that built the
+    projectors (cancelled over shared denominators by the adjugate route) as the one-wall
+    map uses ``T~`` and ``N``.  Each entry is put in the stable form of
+    :mod:`symmech.algebra.stability` unless ``simplify="none"``."""
+    assert proj.PYK is not None and proj.Kbeta is not None  # built with several=True
     level: Level = "none" if simplify == "none" else "light"
     D = sp.diag(*alphas, *[0] * proj.nu.rows)
     ID = sp.eye(D.rows) + D
-    K, beta = sp.Matrix(proj.K), sp.Matrix(proj.beta)
-    PYK = tidy_matrix(sp.Matrix(proj.PY) * K, level)
+    PYK, Kbeta, K = sp.Matrix(proj.PYK), sp.Matrix(proj.Kbeta), sp.Matrix(proj.K)
+    beta = sp.Matrix(proj.beta)
+    reflected = sp.Add(*[a * sp.Matrix(T) for a, T in zip(alphas, proj.T_walls, strict=True)])
+    # K D beta = sum_i alpha_i K[:, i] beta^i (D sits between K and beta)
+    K_reflected = sp.Add(*[a * K[:, i] * beta[i, :] for i, a in enumerate(alphas)])
     out = {
-        "matrix": tidy_matrix(sp.Matrix(proj.PP) - PYK * D * beta, level),
+        "matrix": tidy_matrix(sp.Matrix(proj.PP) - reflected, level),
         "offset": tidy_matrix(PYK * (ID * c), level),
         "W": tidy_matrix(PYK * c, level),
-        "impulse_matrix": tidy_matrix(-K * ID * beta, level),
+        "impulse_matrix": tidy_matrix(-Kbeta - K_reflected, level),
         "impulse_offset": tidy_matrix(K * (ID * c), level),
     }
     if simplify == "none":
