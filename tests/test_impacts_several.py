@@ -415,7 +415,10 @@ def test_one_wall_is_the_existing_map(name, scene):
         single = scene.impact_map(wall.index, law="newton")
         assert scene.impact_map([wall.name], law="newton") is single  # the cached object
         several = derive_several_impact_map(
-            scene.declaration, [wall.index], law="newton", projectors=scene.projectors()
+            scene.declaration,
+            [wall.index],
+            law="newton",
+            projectors=scene.projectors(),
         )
         for _ in range(2):
             point = _point(scene, rng)

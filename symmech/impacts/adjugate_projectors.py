@@ -164,7 +164,8 @@ def adjugate_route(
     build them).  With ``several=True`` also ``PYK``, ``Kbeta`` and ``T_walls`` (see
     :class:`~symmech.impacts.impact_projectors.ImpactProjectors`): ``PY K = Pg Ar^T Ka
     Lambda / (d1 dK)``, ``K beta = Lambda Ka betan / (gamma dK d1)`` and
-    ``T~_i`` (column i of PYK times ``beta^i``) over QQ's denominator, as T~ is."""
+    ``T~_i`` (column i of PYK times ``beta^i``) over QQ's denominator, as T~ is, and
+    ``K[:, i] beta^i = Lambda Ka[:, i] betan_i / (gamma dK d1)``."""
     K = field.K
     if K is None or not K.is_FractionField:
         return None
@@ -335,4 +336,13 @@ def _route(field, g, mu, dpsi, nu, check, cancel, several=False):
             Twl = Tw.to_list()
             walls.append(to_sympy([[frac(Twl[i][j], den_qq) for j in range(n)] for i in range(n)]))
         objects["T_walls"] = tuple(walls)
+        reflected = []
+        for w in range(dpsi.rows):
+            Kw = (Ka.extract(list(range(k)), [w]) * betan.extract([w], list(range(n)))).to_list()
+            reflected.append(
+                to_sympy(
+                    [[frac(lam[a] * Kw[a][j], gamma_dK_d1) for j in range(n)] for a in range(k)]
+                )
+            )
+        objects["Kbeta_walls"] = tuple(reflected)
     return objects, core.denominators(dK)

@@ -59,8 +59,8 @@ class ImpactProjectors:
     (:class:`~symmech.impacts.adjugate_projectors.Denominators`), else None.  Built only
     with ``several=True`` (several walls hit at once, :mod:`symmech.impacts.several`):
     ``PYK = PY K`` (n x rows of A; its column A is ``sum_B C_AB P(Y^B)``, the column 0 is
-    N), ``Kbeta = K beta`` and ``T_walls``, the ``T~_i = PYK[:, i] beta^i`` of each wall
-    row i (Prop. 3.4's T~ for i = 0).
+    N), ``Kbeta = K beta``, ``T_walls``, the ``T~_i = PYK[:, i] beta^i`` of each wall
+    row i (Prop. 3.4's T~ for i = 0), and ``Kbeta_walls``, the ``K[:, i] beta^i``.
     """
 
     g: sp.ImmutableMatrix
@@ -84,6 +84,7 @@ class ImpactProjectors:
     PYK: sp.ImmutableMatrix | None = None
     Kbeta: sp.ImmutableMatrix | None = None
     T_walls: tuple[sp.ImmutableMatrix, ...] = ()
+    Kbeta_walls: tuple[sp.ImmutableMatrix, ...] = ()
 
     @property
     def A(self) -> sp.ImmutableMatrix:
@@ -138,8 +139,8 @@ def impact_projectors(
     :func:`symmech.constraints.projectors.projectors` at ``level``: every route below
     takes them as they are and builds only the impact's own objects.
 
-    ``several``: also build ``PYK``, ``Kbeta`` and ``T_walls`` (every row of ``dpsi`` a
-    wall), by the same route.
+    ``several``: also build ``PYK``, ``Kbeta``, ``T_walls`` and ``Kbeta_walls`` (every row
+    of ``dpsi`` a wall), by the same route.
     """
     g = sp.Matrix(g)
     n = g.rows
@@ -180,6 +181,9 @@ def impact_projectors(
             "PYK": PYK,
             "Kbeta": tidy_matrix(K * beta, level),
             "T_walls": tuple(tidy_matrix(PYK[:, i] * beta[i, :], level) for i in range(dpsi.rows)),
+            "Kbeta_walls": tuple(
+                tidy_matrix(K[:, i] * beta[i, :], level) for i in range(dpsi.rows)
+            ),
         }
     return _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N, **extras)
 
@@ -206,6 +210,7 @@ def _pack(
     PYK=None,
     Kbeta=None,
     T_walls=(),
+    Kbeta_walls=(),
 ) -> ImpactProjectors:
     im = sp.ImmutableMatrix
     return ImpactProjectors(
@@ -230,6 +235,7 @@ def _pack(
         PYK=None if PYK is None else im(PYK),
         Kbeta=None if Kbeta is None else im(Kbeta),
         T_walls=tuple(im(T) for T in T_walls),
+        Kbeta_walls=tuple(im(M) for M in Kbeta_walls),
     )
 
 
@@ -274,6 +280,7 @@ def _in_field(
             "PYK": out(PYKd),
             "Kbeta": out(Kd * betad),
             "T_walls": tuple(out(PYKd[:, i] * betad[i, :]) for i in range(dpsi.rows)),
+            "Kbeta_walls": tuple(out(Kd[:, i] * betad[i, :]) for i in range(dpsi.rows)),
         }
     return _pack(
         g,

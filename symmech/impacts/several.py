@@ -549,7 +549,7 @@ def _closed_form(
     """``matrix = PP - sum_i alpha_i T~_i`` (``= PP - PY K D beta``), ``offset = PY K (I + D)
     c``, ``W = PY K c`` and the impulses ``Lambda = -(K beta + K D beta) v- + K (I + D) c``
     (module docstring; ``K D beta = sum_i alpha_i K[:, i] beta^i``), from the projectors'
-    ``T_walls``, ``PYK`` and ``Kbeta``, built by the route that built the
+    ``T_walls``, ``PYK``, ``Kbeta`` and ``Kbeta_walls``, built by the route that built the
     projectors (cancelled over shared denominators by the adjugate route) as the one-wall
     map uses ``T~`` and ``N``.  Each entry is put in the stable form of
     :mod:`symmech.algebra.stability` unless ``simplify="none"``."""
@@ -558,10 +558,9 @@ def _closed_form(
     D = sp.diag(*alphas, *[0] * proj.nu.rows)
     ID = sp.eye(D.rows) + D
     PYK, Kbeta, K = sp.Matrix(proj.PYK), sp.Matrix(proj.Kbeta), sp.Matrix(proj.K)
-    beta = sp.Matrix(proj.beta)
     reflected = sp.Add(*[a * sp.Matrix(T) for a, T in zip(alphas, proj.T_walls, strict=True)])
     # K D beta = sum_i alpha_i K[:, i] beta^i (D sits between K and beta)
-    K_reflected = sp.Add(*[a * K[:, i] * beta[i, :] for i, a in enumerate(alphas)])
+    K_reflected = sp.Add(*[a * sp.Matrix(M) for a, M in zip(alphas, proj.Kbeta_walls, strict=True)])
     out = {
         "matrix": tidy_matrix(sp.Matrix(proj.PP) - reflected, level),
         "offset": tidy_matrix(PYK * (ID * c), level),
