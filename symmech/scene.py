@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from types import MappingProxyType
-from typing import Any
+from typing import Any, overload
 
 import sympy as sp
 
@@ -23,7 +23,7 @@ from symmech.constraints.projectors import gradients, gram, projectors, solve_sp
 from symmech.declaration.latex import latex_text
 from symmech.declaration.spec import Declaration, ResolvedWall, declare
 from symmech.declaration.wall import Wall
-from symmech.errors import SceneError
+from symmech.errors import ImpactError, SceneError
 from symmech.geometry.connection import (
     christoffel_first_kind,
     christoffel_second_kind,
@@ -31,10 +31,18 @@ from symmech.geometry.connection import (
     forcing,
 )
 from symmech.geometry.lie import commutation_coefficients
-from symmech.impacts import ImpactMap, derive_impact_map
+from symmech.impacts import (
+    ImpactMap,
+    SeveralImpactMap,
+    derive_impact_map,
+    derive_several_impact_map,
+)
 from symmech.mechanics import scene_arguments
 
 __all__ = ["Scene"]
+
+#: How a wall is named: its index, its name, or the Wall (or resolved wall) itself.
+WallKey = int | str | Wall | ResolvedWall
 
 #: Matrices with more entries than this are shown by their shape in ``_repr_latex_``.
 _LATEX_MAX_ENTRIES = 64
@@ -535,19 +543,58 @@ class Scene:
                     return w
         raise SceneError(f"scene {self.name!r}: {wall!r} is not one of its walls")
 
+    @overload
     def impact_map(
         self,
-        wall: int | str | Wall | ResolvedWall = 0,
+        wall: WallKey = 0,
         *,
         law: str | None = None,
         wall_velocity: Sequence | sp.MatrixBase | None = None,
-    ) -> ImpactMap:
+    ) -> ImpactMap: ...
+
+    @overload
+    def impact_map(
+        self,
+        wall: list[WallKey] | tuple[WallKey, ...],
+        *,
+        law: str | None = None,
+        wall_velocity: Sequence | sp.MatrixBase | None = None,
+    ) -> ImpactMap | SeveralImpactMap: ...
+
+    def impact_map(
+        self,
+        wall: WallKey | list[WallKey] | tuple[WallKey, ...] = 0,
+        *,
+        law: str | None = None,
+        wall_velocity: Sequence | sp.MatrixBase | None = None,
+    ) -> ImpactMap | SeveralImpactMap:
         """The closed-form impact map of ``wall`` (index, name or Wall); see :class:`ImpactMap`.
 
         ``v+ = matrix v- + offset`` with the Newton law (Carnot paper eq. 10, Prop. 3.4,
         eq. 17, Prop. 4.2), or the energy-conserving rebound of text 001 section 3.2 with
         ``law="energy"``.  Cached per wall and law (unless ``wall_velocity`` is given).
+
+        A list or tuple of walls gives the map of that set all active at once, the
+        generalized Newton law per wall (:class:`~symmech.impacts.several.SeveralImpactMap`,
+        with the normal impulses and the energy identity), cached per ordered set; a set
+        of one wall is that wall's map (the same cached object).  ``wall_velocity`` is
+        for one wall only (in a set, each wall moves with its declared velocity).
         """
+        if isinstance(wall, list | tuple):
+            if len(wall) != 1:
+                if wall_velocity is not None:
+                    raise ImpactError(
+                        "impact map: wall_velocity is given for one wall; the walls of a set"
+                        " move with their declared velocities"
+                    )
+                resolved_set = tuple(self.wall(w) for w in wall)
+                return self._cached(
+                    ("impacts", tuple(w.index for w in resolved_set), law),
+                    lambda: derive_several_impact_map(
+                        self._decl, resolved_set, law=law, projectors=self.projectors()
+                    ),
+                )
+            (wall,) = wall
         resolved = self.wall(wall)
         if wall_velocity is not None:
             return derive_impact_map(

@@ -6,7 +6,8 @@ trigonometric terms that alone took minutes.  Here every inverse is a closed for
 ``adj(M) / det(M)`` computed in the polynomial ring R of K, where nothing is cancelled
 on the way, and each object of the Carnot paper (002) is assembled as a polynomial
 matrix over one shared polynomial denominator.  With the input denominators cleared
-(``g = Gr / gamma``, ``mu`` and ``A = [dpsi; nu]`` row by row, ``A = Lambda^{-1} Ar``; P,
+(``g = Gr / gamma``, ``mu`` and ``A = [dpsi; nu]`` row by row (``dpsi`` may stack several
+walls' rows; ``N``, ``T~``, ``Q~`` are those of its first row), ``A = Lambda^{-1} Ar``; P,
 QQ, T~, Q~ do not depend on the scale of the rows, and Lambda is put back into Y,
 P(Y^A), C^AB, C_AB, beta^B and N):
 
@@ -19,8 +20,9 @@ P(Y^A), C^AB, C_AB, beta^B and N):
 * ``P(Y^A) = gamma Pg Ar^T Lambda^{-1} / d1``, ``beta = Lambda^{-1} Ar Pg Gr / d1`` and
   ``C^{AB} = gamma Lambda^{-1} Cn Lambda^{-1} / d1`` with ``Cn = Ar Pg Ar^T``;
 * ``C_{AB} = Lambda Ka Lambda / (gamma dK)`` with ``dK = det Cn / d1^(k-1)`` and
-  ``Ka = d1 adj(Cn) / d1^(k-1)`` (k = l + 1).  Both divisions are exact: by Jacobi's
-  theorem a j x j minor of the adjugate ``Pg`` is ``d1^(j-1)`` times a minor of B1, so
+  ``Ka = d1 adj(Cn) / d1^(k-1)`` (k the rows of A: l + 1 for one wall).  Both divisions
+  are exact: by Jacobi's theorem a j x j minor of the adjugate ``Pg`` is ``d1^(j-1)``
+  times a minor of B1, so
   ``dK = (-1)^k det[[B1, [Ar^T; 0]], [[Ar, 0], 0]]``;
 * ``QQ = Pg Ar^T Ka Ar Pg Gr / (d1^2 dK)``, ``N = lambda_0 Pg Ar^T Ka e_0 / (d1 dK)``,
   ``T~ = N beta^0``, ``Q~ = Pg Ar_0^T Ar_0 Pg Gr / (d1 Cn_00)``; a spurious factor d1 of
@@ -152,18 +154,23 @@ def adjugate_route(
     nu: sp.Matrix,
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
     cancel: bool = True,
-) -> tuple[dict[str, sp.Matrix], Denominators] | None:
+    several: bool = False,
+) -> tuple[dict[str, Any], Denominators] | None:
     """The objects of :class:`~symmech.impacts.impact_projectors.ImpactProjectors` other
     than P and Q (a dict keyed by the attribute names) and the shared denominators, by the
     formulas of the module docstring; ``None`` when the field is not a rational-function
     field or the term budget is exceeded.  ``check(C, PY)`` is called before C^AB is
     inverted.  With ``cancel=False`` no gcd is taken at all (the entries as the formulas
-    build them)."""
+    build them).  With ``several=True`` also ``PYK``, ``Kbeta`` and ``T_walls`` (see
+    :class:`~symmech.impacts.impact_projectors.ImpactProjectors`): ``PY K = Pg Ar^T Ka
+    Lambda / (d1 dK)``, ``K beta = Lambda Ka betan / (gamma dK d1)`` and
+    ``T~_i`` (column i of PYK times ``beta^i``) over QQ's denominator, as T~ is, and
+    ``K[:, i] beta^i = Lambda Ka[:, i] betan_i / (gamma dK d1)``."""
     K = field.K
     if K is None or not K.is_FractionField:
         return None
     try:
-        return _route(field, g, mu, dpsi, nu, check, cancel)
+        return _route(field, g, mu, dpsi, nu, check, cancel, several)
     except BudgetExceeded as exc:
         limits.propagate_time(exc)
         return None
@@ -176,7 +183,7 @@ class _Core:
     def __init__(self, field: RationalField, g, mu, dpsi, nu):
         K = field.K
         self.field, self.K, self.R = field, K, K.get_ring()
-        n, m, k = g.rows, mu.rows, 1 + nu.rows
+        n, m, k = g.rows, mu.rows, dpsi.rows + nu.rows
         self.n, self.m, self.k = n, m, k
         gamma_s, Gr = field.matrix(g).clear_denoms(convert=True)
         self.gamma = gamma_s.element
@@ -248,7 +255,7 @@ def shared_denominators(
         return None
 
 
-def _route(field, g, mu, dpsi, nu, check, cancel):
+def _route(field, g, mu, dpsi, nu, check, cancel, several=False):
     core = _Core(field, g, mu, dpsi, nu)
     Fd, n, k, zero = core.K.field, core.n, core.k, core.R.zero
     gamma, lam, d1, dG = core.gamma, core.lam, core.d1, core.dG
@@ -313,4 +320,29 @@ def _route(field, g, mu, dpsi, nu, check, cancel):
         "N": to_sympy(N),
     }
 
+    if several:
+        gamma_dK_d1 = gamma * dK * d1
+        Kbn = (Ka * betan).to_list()
+        objects["PYK"] = to_sympy(
+            [[frac(lam[a] * PYKl[i][a], den_pyk) for a in range(k)] for i in range(n)]
+        )
+        objects["Kbeta"] = to_sympy(
+            [[frac(lam[a] * Kbn[a][j], gamma_dK_d1) for j in range(n)] for a in range(k)]
+        )
+        walls = []
+        for w in range(dpsi.rows):
+            Tw = PYK.extract(list(range(n)), [w]) * betan.extract([w], list(range(n)))
+            _guard(Tw)
+            Twl = Tw.to_list()
+            walls.append(to_sympy([[frac(Twl[i][j], den_qq) for j in range(n)] for i in range(n)]))
+        objects["T_walls"] = tuple(walls)
+        reflected = []
+        for w in range(dpsi.rows):
+            Kw = (Ka.extract(list(range(k)), [w]) * betan.extract([w], list(range(n)))).to_list()
+            reflected.append(
+                to_sympy(
+                    [[frac(lam[a] * Kw[a][j], gamma_dK_d1) for j in range(n)] for a in range(k)]
+                )
+            )
+        objects["Kbeta_walls"] = tuple(reflected)
     return objects, core.denominators(dK)

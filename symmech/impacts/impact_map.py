@@ -339,6 +339,53 @@ def _wall_velocity(declaration: Declaration, value: object, wall: str) -> sp.Mat
     return sp.Matrix(len(entries), 1, entries)
 
 
+def wall_one_form(
+    declaration: Declaration, rw: ResolvedWall, points: Sequence[dict]
+) -> tuple[sp.Expr, sp.Expr, sp.Matrix, sp.Expr]:
+    """``(psi, alpha, dpsi, psi_t)`` of a wall: the one-form ``dpsi = (d psi/d q) S`` in the
+    velocity basis (1 x n; S the frame, or the identity) and ``psi_t = d psi/d t``;
+    :class:`~symmech.ImpactError` when d psi/d q vanishes at every sampled point."""
+    psi = sp.sympify(rw.psi, strict=True)
+    alpha = sp.sympify(rw.restitution, strict=True)
+    row = sp.Matrix([[sp.diff(psi, qi) for qi in declaration.coordinates]])
+    dpsi = row * sp.Matrix(declaration.frame) if declaration.frame is not None else row
+    if all(is_zero(e, points) is True for e in dpsi):
+        raise ImpactError(
+            f"wall {rw.name!r}: psi = {psi} has zero gradient d psi/d q; it does not define a wall"
+        )
+    return psi, alpha, dpsi, sp.diff(psi, TIME)
+
+
+def given_wall_velocity(
+    declaration: Declaration,
+    wall: str,
+    value: object,
+    dpsi: sp.MatrixBase,
+    psi_t: sp.Expr,
+    points: Sequence[dict],
+) -> sp.Matrix:
+    """A given wall velocity V as an n x 1 matrix (velocity basis), checked to move with
+    the wall: ``dpsi(V) + psi_t = 0`` at the sampled ``points`` (Carnot paper eq. 15);
+    :class:`~symmech.ImpactError` otherwise or for a wrong shape."""
+    n = declaration.n
+    V = _wall_velocity(declaration, value, wall)
+    if V.shape == (1, n):
+        V = V.T
+    if V.shape != (n, 1):
+        raise ImpactError(
+            f"wall {wall!r}: wall_velocity must have {n} components (velocity basis),"
+            f" got shape {V.shape}"
+        )
+    normal = (sp.Matrix(dpsi) * V)[0, 0] + psi_t
+    if is_zero(normal, points) is not True:
+        raise ImpactError(
+            f"wall {wall!r}: wall_velocity V does not move with the wall:"
+            f" dpsi(V) + psi_t = {sp.simplify(normal)} != 0 (a point of the wall stays on"
+            " psi = 0, so dpsi(V) = -d psi/d t)"
+        )
+    return V
+
+
 def derive_impact_map(
     declaration: Declaration,
     wall: ResolvedWall | int | str,
@@ -391,16 +438,8 @@ def derive_impact_map(
     q = declaration.coordinates
     n = declaration.n
     v = declaration.velocities
-    psi = sp.sympify(rw.psi, strict=True)
-    alpha = sp.sympify(rw.restitution, strict=True)
-    row = sp.Matrix([[sp.diff(psi, qi) for qi in q]])
-    dpsi = row * sp.Matrix(declaration.frame) if declaration.frame is not None else row
-    psi_t = sp.diff(psi, TIME)
     points = sample_points([*q, *declaration.parameters, TIME])
-    if all(is_zero(e, points) is True for e in dpsi):
-        raise ImpactError(
-            f"wall {rw.name!r}: psi = {psi} has zero gradient d psi/d q; it does not define a wall"
-        )
+    psi, alpha, dpsi, psi_t = wall_one_form(declaration, rw, points)
     g = sp.Matrix(declaration.metric)
     mu = sp.Matrix(declaration.constraint_matrix)
     nu = sp.Matrix(rw.impulsive_matrix)
@@ -428,21 +467,7 @@ def derive_impact_map(
     if wall_velocity is None and rw.velocity is not None:
         wall_velocity = rw.velocity  # declared with the wall (checked by the declaration)
     if wall_velocity is not None:
-        V = _wall_velocity(declaration, wall_velocity, rw.name)
-        if V.shape == (1, n):
-            V = V.T
-        if V.shape != (n, 1):
-            raise ImpactError(
-                f"wall {rw.name!r}: wall_velocity must have {n} components (velocity basis),"
-                f" got shape {V.shape}"
-            )
-        normal = (dpsi * V)[0, 0] + psi_t
-        if is_zero(normal, points) is not True:
-            raise ImpactError(
-                f"wall {rw.name!r}: wall_velocity V does not move with the wall:"
-                f" dpsi(V) + psi_t = {sp.simplify(normal)} != 0 (a point of the wall stays on"
-                " psi = 0, so dpsi(V) = -d psi/d t)"
-            )
+        V = given_wall_velocity(declaration, rw.name, wall_velocity, dpsi, psi_t, points)
     matrix, offset, W = newton_map(proj, alpha, psi_t, V, level)
     if V is None:
         from symmech.impacts.newton import wall_velocity as default_velocity

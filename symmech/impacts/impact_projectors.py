@@ -6,7 +6,10 @@ quasi-velocities v with ``q_dot = S v``); a matrix acts on velocity columns.  In
 * ``g`` (n x n), the metric in the velocity basis, ``T = 1/2 v^T g v``;
 * ``mu`` (m x n), permanent constraints ``mu v = 0``, with the projectors (P, Q) onto
   D = ker mu and D^perp (:func:`symmech.constraints.projectors.projectors`);
-* ``dpsi`` (1 x n), the wall one-form ``d psi`` in the velocity basis: ``(d psi/d q) S``;
+* ``dpsi`` (1 x n), the wall one-form ``d psi`` in the velocity basis: ``(d psi/d q) S``
+  (or w x n, the one-forms of w walls hit at once, :mod:`symmech.impacts.several`: then
+  A, C, K, beta, QQ and PP are those of all the rows, while T~, N, Q~ and P~ are built
+  from the first row only);
 * ``nu`` (l x n), the instantaneous (impulsive) constraints nu^A, A = 1..l.
 
 With ``A = [dpsi; nu]`` ((l+1) x n) the paper's objects are
@@ -53,7 +56,11 @@ class ImpactProjectors:
     (section 3.2), ``T`` (T~, Prop. 3.4), ``Qt`` and ``Pt`` (Q~ and P~, eq. 7) and ``N``
     (the column ``sum_A C_A0 P(Y^A)`` spanning Im T~).  ``denominators`` holds the
     shared polynomial denominators when the adjugate route built the objects
-    (:class:`~symmech.impacts.adjugate_projectors.Denominators`), else None.
+    (:class:`~symmech.impacts.adjugate_projectors.Denominators`), else None.  Built only
+    with ``several=True`` (several walls hit at once, :mod:`symmech.impacts.several`):
+    ``PYK = PY K`` (n x rows of A; its column A is ``sum_B C_AB P(Y^B)``, the column 0 is
+    N), ``Kbeta = K beta``, ``T_walls``, the ``T~_i = PYK[:, i] beta^i`` of each wall
+    row i (Prop. 3.4's T~ for i = 0), and ``Kbeta_walls``, the ``K[:, i] beta^i``.
     """
 
     g: sp.ImmutableMatrix
@@ -74,6 +81,10 @@ class ImpactProjectors:
     Pt: sp.ImmutableMatrix
     N: sp.ImmutableMatrix
     denominators: Denominators | None = None
+    PYK: sp.ImmutableMatrix | None = None
+    Kbeta: sp.ImmutableMatrix | None = None
+    T_walls: tuple[sp.ImmutableMatrix, ...] = ()
+    Kbeta_walls: tuple[sp.ImmutableMatrix, ...] = ()
 
     @property
     def A(self) -> sp.ImmutableMatrix:
@@ -107,6 +118,7 @@ def impact_projectors(
     level: Level = "light",
     check: Callable[[sp.Matrix, sp.Matrix], None] | None = None,
     permanent: tuple[sp.MatrixBase, sp.MatrixBase] | None = None,
+    several: bool = False,
 ) -> ImpactProjectors:
     """Build P, Q, Y^A, P(Y^A), C^AB, C_AB, beta^B, QQ, PP, T~, Q~, P~ (Carnot paper 002).
 
@@ -126,6 +138,9 @@ def impact_projectors(
     scene's, :meth:`symmech.Scene.projectors`), else built here by
     :func:`symmech.constraints.projectors.projectors` at ``level``: every route below
     takes them as they are and builds only the impact's own objects.
+
+    ``several``: also build ``PYK``, ``Kbeta``, ``T_walls`` and ``Kbeta_walls`` (every row
+    of ``dpsi`` a wall), by the same route.
     """
     g = sp.Matrix(g)
     n = g.rows
@@ -136,8 +151,8 @@ def impact_projectors(
     if level != "none":
         field = common_domain([g, mu, dpsi, nu])
         if field.K is not None and not field.K.is_FractionField:
-            return _in_field(field, g, mu, dpsi, nu, P, Q, check)
-        routed = adjugate_route(field, g, mu, dpsi, nu, check)
+            return _in_field(field, g, mu, dpsi, nu, P, Q, check, several)
+        routed = adjugate_route(field, g, mu, dpsi, nu, check, several=several)
         if routed is not None:
             objects, denominators = routed
             return _pack(g, mu, dpsi, nu, P, Q, **objects, denominators=denominators)
@@ -159,11 +174,43 @@ def impact_projectors(
     T = tidy_matrix(N * beta[0, :], level)
     Qt = tidy_matrix(PY[:, 0] * beta[0, :] / C[0, 0], level)
     Pt = tidy_matrix(sp.eye(n) - Qt, level)
-    return _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N)
+    extras = {}
+    if several:
+        PYK = tidy_matrix(PY * K, level)
+        extras = {
+            "PYK": PYK,
+            "Kbeta": tidy_matrix(K * beta, level),
+            "T_walls": tuple(tidy_matrix(PYK[:, i] * beta[i, :], level) for i in range(dpsi.rows)),
+            "Kbeta_walls": tuple(
+                tidy_matrix(K[:, i] * beta[i, :], level) for i in range(dpsi.rows)
+            ),
+        }
+    return _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N, **extras)
 
 
 def _pack(
-    g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N, denominators=None
+    g,
+    mu,
+    dpsi,
+    nu,
+    P,
+    Q,
+    Y,
+    PY,
+    C,
+    K,
+    beta,
+    QQ,
+    PP,
+    T,
+    Qt,
+    Pt,
+    N,
+    denominators=None,
+    PYK=None,
+    Kbeta=None,
+    T_walls=(),
+    Kbeta_walls=(),
 ) -> ImpactProjectors:
     im = sp.ImmutableMatrix
     return ImpactProjectors(
@@ -185,6 +232,10 @@ def _pack(
         Pt=im(Pt),
         N=im(N),
         denominators=denominators,
+        PYK=None if PYK is None else im(PYK),
+        Kbeta=None if Kbeta is None else im(Kbeta),
+        T_walls=tuple(im(T) for T in T_walls),
+        Kbeta_walls=tuple(im(M) for M in Kbeta_walls),
     )
 
 
@@ -197,6 +248,7 @@ def _in_field(
     P: sp.Matrix,
     Q: sp.Matrix,
     check: Callable[[sp.Matrix, sp.Matrix], None] | None,
+    several: bool = False,
 ) -> ImpactProjectors:
     """The same construction in exact arithmetic over the rationals (every entry a
     number): exact and cheap, no simplification needed."""
@@ -221,6 +273,15 @@ def _in_field(
     Nd = PYd * Kd[:, 0]
     Td = Nd * betad[0, :]
     Qtd = (PYd[:, 0] * betad[0, :]) * Kf.quo(Kf.one, Cd[0, 0].element)
+    extras = {}
+    if several:
+        PYKd = PYd * Kd
+        extras = {
+            "PYK": out(PYKd),
+            "Kbeta": out(Kd * betad),
+            "T_walls": tuple(out(PYKd[:, i] * betad[i, :]) for i in range(dpsi.rows)),
+            "Kbeta_walls": tuple(out(Kd[:, i] * betad[i, :]) for i in range(dpsi.rows)),
+        }
     return _pack(
         g,
         mu,
@@ -239,4 +300,5 @@ def _in_field(
         out(Qtd),
         out(eye - Qtd),
         out(Nd),
+        **extras,
     )

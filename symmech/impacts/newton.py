@@ -45,19 +45,22 @@ from symmech.impacts.impact_projectors import ImpactProjectors
 __all__ = ["newton_map", "wall_velocity", "wall_velocity_components"]
 
 
-def wall_velocity(proj: ImpactProjectors, psi_t: sp.Expr, level: Level = "light") -> sp.Matrix:
+def wall_velocity(
+    proj: ImpactProjectors, psi_t: sp.Expr, level: Level = "light", row: int = 0
+) -> sp.Matrix:
     """Default wall velocity ``V = -(psi_t / g(grad psi, grad psi)) grad psi`` (n x 1).
 
     It is the velocity of the wall normal to itself (g-orthogonal to the wall), the only
     part of V that psi determines: ``dpsi(V) = -psi_t`` (Carnot paper, eq. 15).  Zero for
-    a static wall.
+    a static wall.  ``row``: which wall row of ``proj.dpsi`` (several walls hit at once,
+    :mod:`symmech.impacts.several`); ``grad psi`` is then the column ``Y^row``.
     """
     n = proj.g.rows
     psi_t = sp.sympify(psi_t, strict=True)
     if psi_t == 0:
         return sp.zeros(n, 1)
-    Y0 = sp.Matrix(proj.grad_psi)
-    norm2 = (sp.Matrix(proj.dpsi) * Y0)[0, 0]
+    Y0 = sp.Matrix(proj.Y[:, row])
+    norm2 = (sp.Matrix(proj.dpsi[row, :]) * Y0)[0, 0]
     return tidy_matrix(-psi_t / norm2 * Y0, level)
 
 
