@@ -178,3 +178,29 @@ def test_active_set_solution_is_the_lcp_solution_on_random_p_matrices():
     assert solve_small([[0.0, 0.0], [0.0, 0.0]], [1.0, 1.0]) is None
     # no feasible set: K not a P-matrix, g such that nothing works
     assert active_set_solution([[-1.0]], [1.0], 1e-12) is None
+
+
+def test_the_loop_agrees_with_the_closed_form_map_of_the_set():
+    """Where both ends take an impulse, the loop's v+ (Newton directions from the one-wall
+    generated maps) equals the closed-form several-wall map scene.impact_map([A, B])
+    (Carnot framework with both wall rows at once), evaluated at the same state."""
+    scene = rod()
+    both = scene.impact_map(["endA", "endB"])
+    rng = np.random.default_rng(11)
+    checked = 0
+    for _ in range(30):
+        v = np.array([rng.normal(), -abs(rng.normal()) - 0.5, 0.3 * rng.normal()])
+        params = {**ROD, "alpha": 0.5}
+        res = sm.simulate(scene, [0.0, 0.0, 0.0], v, 1e-3, params=params, backend="c")
+        impacts = res.impacts()
+        if len(impacts) != 2 or impacts[0].time != impacts[1].time:
+            continue  # one end only took an impulse: another active set
+        closed = both.apply(list(v)).xreplace(
+            {p: params[str(p)] for p in both.post_velocity.free_symbols if str(p) in params}
+        )
+        closed = closed.xreplace({q: 0 for q in scene.declaration.coordinates})
+        np.testing.assert_allclose(
+            impacts[0].v_plus, np.array(closed, dtype=float).ravel(), atol=1e-12
+        )
+        checked += 1
+    assert checked >= 10
