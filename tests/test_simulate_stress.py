@@ -38,3 +38,32 @@ def test_nearly_dependent_wall_error_follows_the_condition_number_then_is_refuse
 def test_slow_stress_case_passes(name):
     results = stress.run_all("scipy", [name])
     assert all(r.passed for r in results), stress.format_table(results)
+
+
+CONTACTS = ["ladder", "rod_flat", "box_corner", "disc_stack", "cradles", "touching_rest"]
+
+
+@pytest.mark.parametrize("name", CONTACTS)
+def test_contact_stress_case_passes_on_the_c_loop(name):
+    """Several contacts at once (symmech.bench.stress_contacts) on the C loop."""
+    results = stress.run_all("c", [name])
+    assert results
+    failed = [r for r in results if not r.passed]
+    assert not failed, stress.format_table(failed)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "ladder",
+        "rod_flat",
+        "touching_rest",
+        pytest.param("box_corner", marks=pytest.mark.slow),
+        pytest.param("disc_stack", marks=pytest.mark.slow),
+        pytest.param("cradles", marks=pytest.mark.slow),
+    ],
+)
+def test_contact_stress_case_passes_on_the_numpy_loop(name):
+    results = stress.run_all("numpy", [name])
+    failed = [r for r in results if not r.passed]
+    assert results and not failed, stress.format_table(failed)

@@ -94,6 +94,21 @@ CASES: dict[str, Case] = {
             "three touching balls, the first moving: the last leaves",
         ),
         Case(
+            "falling_rod",
+            (0.0, 1.0, 0.2),
+            (0.0, 0.0, 0.0),
+            0.85,
+            "rod dropped tilted, alpha = 0.5: its ends strike in turn (8 impacts, before they"
+            " accumulate on one end)",
+        ),
+        Case(
+            "ladder",
+            (math.cos(1.2), math.sin(1.2), 1.2),
+            (0.0, 0.0, 0.0),
+            1.0,
+            "ladder released at theta = 1.2 on a frictionless floor and wall: leaves the wall",
+        ),
+        Case(
             "pendulum_wall",
             (-0.3,),
             (4.0,),

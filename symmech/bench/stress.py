@@ -24,6 +24,8 @@ Zeno                      the ball's accumulation time sqrt(2h/g)(1+alpha)/(1-al
 10^4 elastic bounces      energy drift over 10^4 impacts of the elastic ball
 Newton's cradle           5 touching balls: the velocity passes to the last, exactly
 ========================  ===============================================================
+
+The cases with several contacts at once are in :mod:`symmech.bench.stress_contacts`.
 """
 
 from __future__ import annotations
@@ -31,12 +33,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 
 import numpy as np
 import sympy as sp
 
 import symmech.simulate as simulate_pkg
+from symmech.bench.stress_contacts import CONTACT_CASES
+from symmech.bench.stress_support import StressResult, energy, format_table, result, sane
 from symmech.declaration.symbols import coordinates, velocities
 from symmech.declaration.wall import Wall
 from symmech.examples import (
@@ -47,40 +50,8 @@ from symmech.examples import (
     stiff_dumbbell,
 )
 from symmech.scene import Scene
-from symmech.simulate.result import SimulationResult
 
 __all__ = ["CASES", "StressResult", "format_table", "run_all", "sloped_line"]
-
-
-@dataclass(frozen=True)
-class StressResult:
-    """One stress case: the measured error, its tolerance, and the verdict."""
-
-    case: str
-    setting: str
-    error: float
-    tolerance: float
-    passed: bool
-    detail: str
-    seconds: float
-
-
-def _sane(res: SimulationResult, gap: Callable[[np.ndarray], np.ndarray], atol: float) -> str:
-    """'' when the run is finite and never tunnels, else what went wrong."""
-    if not (np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.v))):
-        return "NaN or Inf in the result"
-    g = gap(res.q)
-    if np.min(g) < -10 * atol:
-        return f"tunnelled: gap {np.min(g):.3g}"
-    return ""
-
-
-def _result(
-    case: str, setting: str, error: float, tol: float, problem: str, t0: float, extra: str = ""
-) -> StressResult:
-    ok = not problem and math.isfinite(error) and error <= tol
-    detail = problem or extra
-    return StressResult(case, setting, error, tol, ok, detail, time.perf_counter() - t0)
 
 
 def _ellipse_gap(a: float, b: float) -> Callable[[np.ndarray], np.ndarray]:
@@ -88,13 +59,6 @@ def _ellipse_gap(a: float, b: float) -> Callable[[np.ndarray], np.ndarray]:
         return q[:, 1] - np.sqrt(a**2 * np.sin(q[:, 2]) ** 2 + b**2 * np.cos(q[:, 2]) ** 2)
 
     return gap
-
-
-def _energy(scene: Scene, params: dict[str, float], q: np.ndarray, v: np.ndarray) -> float:
-    subs = {p: params[str(p)] for p in scene.parameters}
-    subs.update(dict(zip(scene.coordinates, q, strict=True)))
-    subs.update(dict(zip(scene.velocities, v, strict=True)))
-    return float(sp.sympify(scene.energy(), strict=True).xreplace(subs))
 
 
 def mass_ratio(backend: str) -> Iterator[StressResult]:
@@ -105,15 +69,15 @@ def mass_ratio(backend: str) -> Iterator[StressResult]:
         res = simulate_pkg.simulate(
             scene, [0, 1.5, 0.3], [0, 0, 2.0], 3.0, params=p, backend=backend, max_events=20_000
         )
-        e0 = _energy(scene, p, np.array([0, 1.5, 0.3]), np.array([0, 0, 2.0]))
-        e1 = _energy(scene, p, res.q[-1], res.v[-1])
+        e0 = energy(scene, p, np.array([0, 1.5, 0.3]), np.array([0, 0, 2.0]))
+        e1 = energy(scene, p, res.q[-1], res.v[-1])
         err = abs(e1 - e0) / abs(e0)
-        yield _result(
+        yield result(
             "mass/inertia ratio",
             f"I/m = {ratio:g}",
             err,
             1e-6,
-            _sane(res, _ellipse_gap(1.0, 0.5), 1e-10) or ("" if res.success else res.message),
+            sane(res, _ellipse_gap(1.0, 0.5), 1e-10) or ("" if res.success else res.message),
             t0,
             f"{res.stats['impacts']} impacts, relative energy error",
         )
@@ -134,12 +98,12 @@ def aspect_ratio(backend: str) -> Iterator[StressResult]:
         impacts = res.impacts()
         exact = math.sqrt(2 * 1.0 / 9.81)
         err = abs(impacts[0].time - exact) if impacts else math.inf
-        yield _result(
+        yield result(
             "ellipse aspect ratio",
             f"b/a = {1 / aspect:g}, theta = pi/2 - 1e-12",
             err,
             1e-9,
-            _sane(res, _ellipse_gap(a, b), 1e-10) or ("" if res.success else res.message),
+            sane(res, _ellipse_gap(a, b), 1e-10) or ("" if res.success else res.message),
             t0,
             "first impact time against sqrt(2 (y0 - h)/g)",
         )
@@ -162,12 +126,12 @@ def grazing(backend: str) -> Iterator[StressResult]:
 
     momentum = abs(float(np.sum(res.v[-1])) - 1e-10)
     kinds = ",".join(e.kind for e in res.events) or "none"
-    yield _result(
+    yield result(
         "grazing",
         "normal speed 1e-10",
         momentum,
         1e-24,
-        _sane(res, gap, 1e-10),
+        sane(res, gap, 1e-10),
         t0,
         f"events: {kinds}; momentum error",
     )
@@ -185,15 +149,15 @@ def grazing(backend: str) -> Iterator[StressResult]:
         rtol=1e-12,
         atol=1e-14,
     )
-    e0 = _energy(scene, p, np.array([-math.asin(0.5)]), np.array([0.0]))
-    e1 = _energy(scene, p, res.q[-1], res.v[-1])
+    e0 = energy(scene, p, np.array([-math.asin(0.5)]), np.array([0.0]))
+    e1 = energy(scene, p, res.q[-1], res.v[-1])
     kinds = ",".join(e.kind for e in res.events) or "none"
-    yield _result(
+    yield result(
         "grazing",
         "exactly tangent",
         abs(e1 - e0) / abs(e0),
         1e-10,
-        _sane(res, lambda q: 0.5 - np.sin(q[:, 0]), 1e-14),
+        sane(res, lambda q: 0.5 - np.sin(q[:, 0]), 1e-14),
         t0,
         f"events: {kinds}; relative energy error",
     )
@@ -253,7 +217,7 @@ def nearly_dependent(backend: str) -> Iterator[StressResult]:
             float(np.max(np.abs(imp[0].v_plus + 0.5 * imp[0].v_minus)) / speed) if imp else math.inf
         )
         cond = res.stats["impact_condition"]
-        yield _result(
+        yield result(
             "nearly dependent wall",
             f"eps = {eps:g}",
             err,
@@ -273,13 +237,13 @@ def stiff(backend: str) -> Iterator[StressResult]:
         res = simulate_pkg.simulate(
             scene, q0, v0, 0.5, params=p, backend=backend, rtol=1e-9, atol=1e-11
         )
-        e0, e1 = _energy(scene, p, q0, v0), _energy(scene, p, res.q[-1], res.v[-1])
-        yield _result(
+        e0, e1 = energy(scene, p, q0, v0), energy(scene, p, res.q[-1], res.v[-1])
+        yield result(
             "stiff potential",
             f"k = {k:g}",
             abs(e1 - e0) / abs(e0),
             1e-6,
-            _sane(res, lambda q: q[:, 0], 1e-11),
+            sane(res, lambda q: q[:, 0], 1e-11),
             t0,
             f"{res.stats['steps']} steps, {res.stats['impacts']} impacts; relative energy error",
         )
@@ -303,12 +267,12 @@ def zeno(backend: str) -> Iterator[StressResult]:
         )
         exact = math.sqrt(2 / 9.81) * (1 + alpha) / (1 - alpha)
         got = res.accumulation_time if res.accumulation_time is not None else math.inf
-        yield _result(
+        yield result(
             "Zeno",
             f"alpha = {alpha:g}",
             abs(got - exact) / exact,
             1e-7,
-            _sane(res, lambda q: q[:, 0], 1e-12) or ("" if res.status == "zeno" else res.message),
+            sane(res, lambda q: q[:, 0], 1e-12) or ("" if res.status == "zeno" else res.message),
             t0,
             f"{res.stats['impacts']} impacts; relative error of t*",
         )
@@ -322,13 +286,13 @@ def elastic_bounces(backend: str) -> Iterator[StressResult]:
     res = simulate_pkg.simulate(
         scene, [1.0], [0.0], 1e4 * period, params=p, backend=backend, max_events=20_000
     )
-    e1 = _energy(scene, p, res.q[-1], res.v[-1])
-    yield _result(
+    e1 = energy(scene, p, res.q[-1], res.v[-1])
+    yield result(
         "10^4 elastic bounces",
         f"{res.stats['impacts']} impacts",
         abs(e1 - 9.81) / 9.81,
         1e-9,
-        _sane(res, lambda q: q[:, 0], 1e-10) or ("" if res.success else res.message),
+        sane(res, lambda q: q[:, 0], 1e-10) or ("" if res.success else res.message),
         t0,
         "relative energy drift",
     )
@@ -350,12 +314,12 @@ def cradle(backend: str) -> Iterator[StressResult]:
     def gap(q: np.ndarray) -> np.ndarray:
         return np.min(np.diff(q, axis=1) - 1.0, axis=1)
 
-    yield _result(
+    yield result(
         "Newton's cradle",
         "5 balls, zero gaps",
         err,
         1e-15,
-        _sane(res, gap, 1e-10),
+        sane(res, gap, 1e-10),
         t0,
         f"{res.stats['impacts']} impacts; velocity error",
     )
@@ -370,6 +334,7 @@ CASES: dict[str, Callable[[str], Iterator[StressResult]]] = {
     "zeno": zeno,
     "elastic_bounces": elastic_bounces,
     "cradle": cradle,
+    **CONTACT_CASES,
 }
 
 
@@ -381,17 +346,3 @@ def run_all(backend: str = "c", only: list[str] | None = None) -> list[StressRes
             continue
         out.extend(case(backend))
     return out
-
-
-def format_table(results: list[StressResult]) -> str:
-    """A Markdown table of the results."""
-    lines = [
-        "| case | setting | error | tolerance | verdict | seconds | detail |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for r in results:
-        lines.append(
-            f"| {r.case} | {r.setting} | {r.error:.2e} | {r.tolerance:.1e} |"
-            f" {'pass' if r.passed else 'FAIL'} | {r.seconds:.2f} | {r.detail} |"
-        )
-    return "\n".join(lines)
