@@ -68,7 +68,7 @@ from symmech.algebra.zero import is_zero
 from symmech.declaration.latex import latex_text
 from symmech.impacts.impact_projectors import ImpactProjectors
 
-__all__ = ["CarnotResult", "carnot_residual"]
+__all__ = ["CarnotResult", "carnot_residual", "decide_identity"]
 
 Formed = tuple[sp.Expr, dict[str, sp.Expr], sp.ImmutableMatrix]
 
@@ -220,14 +220,30 @@ def carnot_residual(
     def symbolic() -> Formed:
         return _symbolic(setup)
 
-    if _size([proj.g, proj.P, proj.PP, proj.T, matrix, offset, W]) <= limits.CARNOT_FIELD_OPS:
+    small = _size([proj.g, proj.P, proj.PP, proj.T, matrix, offset, W]) <= limits.CARNOT_FIELD_OPS
+    return decide_identity(theorem, statement, symbolic, setup.evaluate, small)
+
+
+def decide_identity(
+    theorem: str,
+    statement: str,
+    symbolic: Callable[[], Formed],
+    evaluate: Callable[..., Any],
+    small: bool,
+) -> CarnotResult:
+    """Decide whether a Carnot residual is identically zero, cheapest route first: the
+    residual formed in the fraction field (``small``: its inputs within
+    :data:`symmech.algebra.budget.CARNOT_FIELD_OPS`, and within its time budget), else
+    exact evaluation at sample points (:func:`symmech.algebra.identity.identically_zero`
+    with ``evaluate``), else the symbolic residual."""
+    if small:
         formed = _bounded(symbolic)
         if formed is not None and formed[0] == 0:
             return CarnotResult(
                 theorem, statement, True, "fraction field", Fraction(0), symbolic, formed=formed
             )
     try:
-        verdict = identically_zero(setup.evaluate)
+        verdict = identically_zero(evaluate)
     except (Unsupported, ZeroDivisionError):
         verdict = None
     if verdict is not None and (verdict.zero or verdict.model_exact):

@@ -49,7 +49,6 @@ Which walls of a touching set take an impulse is decided numerically by
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from fractions import Fraction
 from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
@@ -58,7 +57,6 @@ import sympy as sp
 from symmech.algebra import budget as limits
 from symmech.algebra.energy_forms import Affine, QuadraticForm
 from symmech.algebra.field import common_domain
-from symmech.algebra.identity import Unsupported, identically_zero
 from symmech.algebra.numeric import EvaluationError
 from symmech.algebra.rank import rank_at
 from symmech.algebra.sampling import sample_points
@@ -67,7 +65,7 @@ from symmech.algebra.stability import stable_matrix
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import ImpactError
 from symmech.impacts.adjugate_projectors import shared_denominators
-from symmech.impacts.carnot import CarnotResult, _bounded, _size
+from symmech.impacts.carnot import CarnotResult, _size, decide_identity
 from symmech.impacts.degeneracy import Singularity, singular_set
 from symmech.impacts.impact_map import _resolve, given_wall_velocity, wall_one_form
 from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
@@ -272,29 +270,10 @@ def _carnot(m: SeveralImpactMap) -> CarnotResult:
         return _symbolic(m)
 
     p = m.projectors
-    if _size([p.g, p.P, p.beta, m.matrix, m.offset, m.W, m.loss_form]) <= limits.CARNOT_FIELD_OPS:
-        formed = _bounded(symbolic)
-        if formed is not None and formed[0] == 0:
-            return CarnotResult(
-                _THEOREM, _STATEMENT, True, "fraction field", Fraction(0), symbolic, formed=formed
-            )
-    try:
-        verdict = identically_zero(lambda value, const: _evaluate(m, value, const))
-    except (Unsupported, ZeroDivisionError):
-        verdict = None
-    if verdict is not None and (verdict.zero or verdict.model_exact):
-        return CarnotResult(
-            _THEOREM,
-            _STATEMENT,
-            verdict.zero,
-            "exact evaluation",
-            verdict.error_bound,
-            symbolic,
-            verdict.describe(),
-        )
-    formed = symbolic()
-    return CarnotResult(
-        _THEOREM, _STATEMENT, formed[0] == 0, "symbolic", Fraction(0), symbolic, formed=formed
+    parts = [p.g, p.P, p.beta, m.matrix, m.offset, m.W, m.loss_form]
+    small = _size(parts) <= limits.CARNOT_FIELD_OPS
+    return decide_identity(
+        _THEOREM, _STATEMENT, symbolic, lambda value, const: _evaluate(m, value, const), small
     )
 
 
