@@ -14,8 +14,10 @@ T = me.dynamicsymbols._t
 
 
 def _parameter_values(scene: sm.Scene, values: dict) -> dict:
+    """The values of the scene's parameters by name; one the model's equations do not
+    contain (a constant of the potential) gets 0.7: it must not matter."""
     byname = {k.name: v for k, v in values.items() if isinstance(k, sp.Symbol)}
-    return {p: byname[p.name] for p in scene.parameters}
+    return {p: byname.get(p.name, 0.7) for p in scene.parameters}
 
 
 def scene_accelerations(scene: sm.Scene, values: dict, qs, vs) -> np.ndarray:
@@ -93,3 +95,22 @@ def worst_difference(model, scene: sm.Scene, values: dict, *, seed: int = 7, sta
         theirs = model_accelerations(model, values, qs[:k], vs, basis)
         worst = max(worst, float(np.max(np.abs(ours - theirs) / (1 + np.abs(theirs)))))
     return worst
+
+
+def random_values(model, seed: int = 11) -> dict:
+    """Values in [0.5, 1.5] for the symbols of the model's equations (its parameters)."""
+    rng = np.random.default_rng(seed)
+    symbols = set()
+    for e in (*model.mass_matrix_full, *model.forcing_full):
+        symbols |= {s for s in e.free_symbols if isinstance(s, sp.Symbol) and s != T}
+    return {s: float(rng.uniform(0.5, 1.5)) for s in sorted(symbols, key=str)}
+
+
+def round_trip(model, name: str = "model") -> tuple[str, object]:
+    """``("imported", worst difference)`` or ``("refused", the SceneError's message)``."""
+    values = random_values(model)
+    try:
+        scene = sm.Scene.from_mechanics(model, name=name)
+    except sm.SceneError as exc:
+        return "refused", str(exc)
+    return "imported", worst_difference(model, scene, values)

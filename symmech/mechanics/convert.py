@@ -59,6 +59,7 @@ from symmech.algebra.numeric import EvaluationError, evaluate_matrix
 from symmech.algebra.rank import rank_at
 from symmech.algebra.walk import atoms
 from symmech.algebra.zero import is_zero
+from symmech.declaration.admissible import NON_SMOOTH
 from symmech.declaration.checks import Points
 from symmech.declaration.dynamic import DynamicTranslation
 from symmech.errors import SceneError
@@ -200,6 +201,7 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
     for load in model.loads:
         # q_dot in a load is replaced by S u, as KanesMethod does (its _form_fr)
         where, vector = load[0], _in_basis(load[1], model)
+        _refuse_non_smooth(vector.to_matrix(model.frame), f"the load on {where}")
         if isinstance(where, me.ReferenceFrame):
             w = _partials(where.ang_vel_in(model.frame), model, f"torque on {where}")
             F = [a + _dot(vector, b) for a, b in zip(F, w, strict=True)]
@@ -241,6 +243,19 @@ def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: Model) -> bool:
     return _identically_zero([a + b for a, b in zip(lhs, Fr, strict=True)])
 
 
+def _refuse_non_smooth(exprs: Any, what: str) -> None:
+    """Refuse a part of the model holding a non-smooth function (``Abs``, ``sign`` ...:
+    :data:`~symmech.declaration.admissible.NON_SMOOTH`), naming it: symmech differentiates
+    every part (Christoffel symbols, gradients, impact maps)."""
+    found = sorted({type(f).__name__ for e in exprs for f in sp.sympify(e).atoms(*NON_SMOOTH)})
+    if found:
+        raise SceneError(
+            f"from_mechanics: {what} contains the non-smooth functions {found} (Coulomb"
+            " friction, a simplified square root ...); symmech needs smooth loads and"
+            " kinematics: write it without them (a smooth law such as tanh(v/eps) for sign)"
+        )
+
+
 def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
     """The velocity constraints and the differentiated holonomic ones, independent rows."""
     bad = [e for e in model.velocity_offsets if e != 0]
@@ -270,7 +285,11 @@ def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
 def _inertia_forcing(model: Model) -> list[sp.Expr]:
     """Kane's generalized inertia forces without the u_dot terms (slides 000, Kane's
     method): ``-sum m a0_P . v_P,r - (I . alpha0 + w x I . w) . w_r`` where ``a0`` and
-    ``alpha0`` are the accelerations with ``u_dot = 0`` (``q_dot = S u`` substituted)."""
+    ``alpha0`` are the accelerations with ``u_dot = 0`` (``q_dot = S u`` substituted).
+    An acceleration the model set (``a2pt_theory``, ``set_acc``, ``set_ang_acc``) is
+    used as set, as KanesMethod uses it, even where it is not the derivative of the
+    velocity (sympy's ``test_kane.py::test_aux``: ``a2pt_theory`` through a frame the
+    vector is not fixed in)."""
     me = mechanics()
     t = me.dynamicsymbols._t
     frame = model.frame
@@ -280,18 +299,38 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
     for body in model.bodies:
         v = _in_basis(body.masscenter.vel(frame), model)
         parts = _partials(body.masscenter.vel(frame), model, f"{body}: mass centre velocity")
-        a0 = _in_basis(v.dt(frame).xreplace(still), model)
+        given = body.masscenter._acc_dict.get(frame)
+        a0 = _as_set(given, model) if given is not None else v.dt(frame)
+        a0 = _in_basis(a0.xreplace(still), model)
         for r in range(n):
             f[r] -= body.mass * _dot(a0, parts[r], expand=False)
         if isinstance(body, me.RigidBody):
             w = _in_basis(body.frame.ang_vel_in(frame), model)
             wparts = _partials(body.frame.ang_vel_in(frame), model, f"{body}: angular velocity")
-            alpha0 = _in_basis(w.dt(frame).xreplace(still), model)
+            given = body.frame._ang_acc_dict.get(frame)
+            alpha0 = _as_set(given, model) if given is not None else w.dt(frame)
+            alpha0 = _in_basis(alpha0.xreplace(still), model)
             inertia = body.central_inertia
             torque = (inertia & alpha0) + (w ^ (inertia & w))
             for r in range(n):
                 f[r] -= _dot(torque, wparts[r], expand=False)
     return f
+
+
+def _as_set(acc: Any, model: Model) -> Any:
+    """An acceleration the model set, in the velocity basis: ``q_ddot`` replaced by the
+    derivative of ``S u`` (the q_dots of the Lagrange basis are the basis itself)."""
+    t = mechanics().dynamicsymbols._t
+    qdot = model._qdot_map()
+    if not qdot:
+        return acc
+    qddot = {d.diff(t): _in_basis_expr(e.diff(t), model) for d, e in qdot.items()}
+    return acc.xreplace(qddot)
+
+
+def _in_basis_expr(e: sp.Expr, model: Model) -> sp.Expr:
+    qmap = model._qdot_map()
+    return e.xreplace(qmap) if qmap else e
 
 
 def _embedded_correction(
@@ -344,6 +383,11 @@ def _regular_metric(M: sp.Matrix, rows: list[list[sp.Expr]], model: Model) -> sp
     singular, point = _singular(M)
     if not singular:
         return M
+    if not model.bodies and model.lagrangian is None:
+        raise SceneError(
+            "from_mechanics: the model has no bodies (its equations were formed with an"
+            " empty body list): there is no kinetic energy, and symmech needs one"
+        )
     if rows:
         mu = sp.Matrix(rows)
         augmented = (M + mu.T * mu).applyfunc(sp.expand)
@@ -422,6 +466,8 @@ def _arguments(model_: Model, kind: str, walls: Sequence, name: str | None) -> d
         if correction is not None:
             F = [a + b for a, b in zip(F, correction, strict=True)]
     rows = [plain(r, f"constraints[{a}]") for a, r in enumerate(model_rows)]
+    # (after the translation to real symbols, where sqrt(q**2) becomes Abs(q))
+    _refuse_non_smooth([e for r in rows for e in r], "a velocity or configuration constraint")
     out: dict[str, Any] = {
         "metric": M,
         "potential": V,

@@ -166,6 +166,14 @@ class Model:
             raise SceneError("from_mechanics: q_dot = S u with S depending on the speeds")
         # speeds no kinematic equation reaches get an ignorable coordinate
         extra = [r for r in range(len(u)) if all(S[i, r] == 0 for i in range(S.rows))]
+        if S.rows > len(u):
+            raise SceneError(
+                f"from_mechanics: {source} has {len(self.q)} coordinates {self.q} and only"
+                f" {len(u)} speeds: coordinates tied by a configuration constraint (a unit"
+                " quaternion, or q_dependent) are not supported, symmech needs q_dot = S(q) u"
+                " with S square; use as many coordinates as speeds (for an orientation, three"
+                " angles, e.g. orient_body_fixed)"
+            )
         if S.rows + len(extra) != len(u):
             raise SceneError(
                 f"from_mechanics: {len(self.q)} coordinates and {len(u)} speeds; the speeds"
