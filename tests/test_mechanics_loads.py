@@ -10,7 +10,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
-from mechanics_support import worst_difference
+from mechanics_support import (
+    consistent_speeds,
+    model_accelerations,
+    model_basis,
+    random_values,
+    worst_difference,
+)
 from sympy.physics import mechanics as me
 
 import symmech as sm
@@ -264,3 +270,56 @@ def test_lagrange_loads_without_frame_are_refused_naming_frame():
     lm = me.LagrangesMethod(L, [q], forcelist=[(P, -c * q.diff(T) * N.x)])
     with pytest.raises(sm.SceneError, match=r"no frame=; .* pass frame=N"):
         sm.Scene.from_mechanics(lm)
+
+
+@pytest.mark.parametrize("which", ["pendulum_on_cart", "rolling_disc_lu", "actuators"])
+def test_generated_c_rhs_equals_the_models_own_equations(which):
+    """The generated C of a few imported models against the model's own equations."""
+    from codegen_support import require_c_compiler
+    from sympy.physics.mechanics import models
+
+    require_c_compiler()
+    if which == "pendulum_on_cart":
+        model = models.n_link_pendulum_on_cart(2, True, True)
+        values = random_values(model)
+    elif which == "rolling_disc_lu":
+        from sympy.physics.mechanics.tests.test_kane5 import _create_rolling_disc
+
+        props = _create_rolling_disc()
+        model = me.KanesMethod(
+            props["frame"],
+            props["q_ind"],
+            props["u_ind"],
+            props["kdes"],
+            u_dependent=props["u_dep"],
+            velocity_constraints=props["fnh"],
+            bodies=props["bodies"],
+            forcelist=props["loads"],
+            explicit_kinematics=False,
+            constraint_solver="LU",
+        )
+        model.kanes_equations()
+        values = dict(zip(sp.symbols("g r m"), (9.81, 0.26, 3.43), strict=True))
+    else:
+        model, values = _pendulum_system_with_actuators()
+    scene = sm.Scene.from_mechanics(model, name=which)
+    mod = sm.codegen.generate(scene, target="c", functions=["rhs"]).load()
+    inputs = sorted(
+        {a for e in model.forcing_full for a in e.atoms(sp.core.function.AppliedUndef)}
+        - set(model.q)
+        - set(model_basis(model)),
+        key=str,
+    )
+    rng = np.random.default_rng(3)
+    byname = {str(k): v for k, v in values.items()}
+    params = {p: byname.get(p, 0.7) for p in mod.parameters}
+    given = {str(a.func): float(rng.uniform(-1, 1)) for a in inputs}
+    for _ in range(3):
+        qs = rng.uniform(-0.8, 0.8, scene.n)
+        vs = consistent_speeds(scene, values, qs, rng)
+        ours = mod.rhs(np.concatenate([qs, vs]), params, inputs=given or None)[scene.n :]
+        model_values = {**values, **{a: given[str(a.func)] for a in inputs}}
+        theirs = model_accelerations(
+            model, model_values, qs[: len(model.q)], vs, model_basis(model)
+        )
+        np.testing.assert_allclose(ours, theirs, rtol=1e-10, atol=1e-10)
