@@ -323,3 +323,23 @@ def test_generated_c_rhs_equals_the_models_own_equations(which):
             model, model_values, qs[: len(model.q)], vs, model_basis(model)
         )
         np.testing.assert_allclose(ours, theirs, rtol=1e-10, atol=1e-10)
+
+
+def test_kane_ignores_potential_energy_as_kanes_method_does_and_says_so():
+    """KanesMethod forms its equations from the loads: a body's potential_energy is not
+    read (sympy's own equations have no spring here), and the import warns about it."""
+    q, u = me.dynamicsymbols("q u")
+    m, k = sp.symbols("m k")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", q * N.x)
+    P.set_vel(N, u * N.x)
+    particle = me.Particle("p", P, m)
+    particle.potential_energy = k * q**2 / 2
+    km = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(T) - u])
+    km.kanes_equations([particle], [(P, -m * u * N.x)])
+    with pytest.warns(sm.SymmechWarning, match=r"ignores the potential_energy of \['p'\]"):
+        scene = sm.Scene.from_mechanics(km)
+    assert scene.potential == 0
+    assert worst_difference(km, scene, {m: 1.3, k: 2.0}) < 1e-12

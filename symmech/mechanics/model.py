@@ -5,11 +5,12 @@ Lagrangian.  How each is turned into a scene: :mod:`symmech.mechanics.convert`."
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import sympy as sp
 
-from symmech.errors import SceneError
+from symmech.errors import SceneError, SymmechWarning
 
 __all__ = ["Model", "mechanics"]
 
@@ -33,6 +34,21 @@ def model_kind(model: object) -> str:
         f"from_mechanics: expected a KanesMethod, LagrangesMethod or System, got"
         f" {type(model).__name__}"
     )
+
+
+def _warn_potential_energies(bodies: list[Any], who: str) -> None:
+    """Kane's equations do not read ``potential_energy`` (sympy's KanesMethod forms the
+    generalized active forces from the loads alone), so neither does the import of a Kane
+    model; say so when a body has one, which the user may have meant to count."""
+    named = [str(b) for b in bodies if getattr(b, "potential_energy", 0) != 0]
+    if named:
+        warnings.warn(
+            f"from_mechanics: {who} ignores the potential_energy of {named} (its"
+            " equations come from the loads), and so does the import; apply the force as"
+            " a load, or form the equations with LagrangesMethod",
+            SymmechWarning,
+            stacklevel=4,
+        )
 
 
 class Model:
@@ -74,6 +90,7 @@ class Model:
         self.q = list(k.q)
         self.frame = k._inertial
         self.bodies = list(k.bodies or [])
+        _warn_potential_energies(self.bodies, "KanesMethod")
         self.loads = list(k.loads or [])
         self._speeds(list(k.u), k.kindiffdict(), "KanesMethod")
         if k._k_nh is not None and k._k_nh.rows:
@@ -127,6 +144,7 @@ class Model:
             self.basis, self.S = qd, None
             self.lagrangian = me.Lagrangian(self.frame, *self.bodies)
         elif s.u.shape[0]:
+            _warn_potential_energies(self.bodies, "A System formed with KanesMethod")
             sol = sp.solve(list(s.kdes), qd, dict=True)
             if len(sol) != 1:
                 raise SceneError(
