@@ -247,7 +247,9 @@ def _refuse_non_smooth(exprs: Any, what: str) -> None:
     """Refuse a part of the model holding a non-smooth function (``Abs``, ``sign`` ...:
     :data:`~symmech.declaration.admissible.NON_SMOOTH`), naming it: symmech differentiates
     every part (Christoffel symbols, gradients, impact maps)."""
-    found = sorted({type(f).__name__ for e in exprs for f in sp.sympify(e).atoms(*NON_SMOOTH)})
+    found = sorted(
+        {type(f).__name__ for e in exprs for f in sp.sympify(e, strict=True).atoms(*NON_SMOOTH)}
+    )
     if found:
         raise SceneError(
             f"from_mechanics: {what} contains the non-smooth functions {found} (Coulomb"
