@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import doctest
 import importlib
+import inspect
 import io
 import pkgutil
 import time
@@ -76,6 +77,17 @@ def _test_functions() -> Iterator[tuple[str, object]]:
         for name, fn in sorted(vars(module).items()):
             if name.startswith("test_") and callable(fn):
                 yield f"{info.name}::{name}", fn
+            elif name.startswith("Test") and isinstance(fn, type):
+                yield from _test_methods(info.name, name, fn)
+
+
+def _test_methods(module: str, name: str, cls: type) -> Iterator[tuple[str, object]]:
+    """The test methods of a test class that need no fixture (``self`` alone), each on a
+    fresh instance (sympy's ``TestSystemExamples``)."""
+    for method, fn in sorted(vars(cls).items()):
+        if method.startswith("test_") and callable(fn):
+            if list(inspect.signature(fn).parameters) == ["self"]:
+                yield f"{module}::{name}::{method}", lambda fn=fn: fn(cls())
 
 
 def _doctests() -> Iterator[tuple[str, object]]:

@@ -44,7 +44,10 @@ def scene_accelerations(scene: sm.Scene, values: dict, qs, vs) -> np.ndarray:
 
 
 def model_basis(model) -> list:
-    """The model's velocities: its generalized speeds, or the q_dots (Lagrange)."""
+    """The model's velocities: its generalized speeds, or the q_dots (Lagrange; a System
+    formed with LagrangesMethod orders them as its q, not as its joints' speeds)."""
+    if isinstance(getattr(model, "eom_method", None), me.LagrangesMethod):
+        return [c.diff(T) for c in model.q]
     u = getattr(model, "u", None)
     return list(u) if u is not None and len(u) else [c.diff(T) for c in model.q]
 
