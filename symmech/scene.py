@@ -164,7 +164,10 @@ class Scene:
         Kane's generalized speeds become the quasi-velocities (``q_dot = S(q) u`` from the
         kinematic differential equations), velocity constraints and differentiated
         holonomic constraints the constraints, constant forces the potential (when they
-        derive from one), every other load an applied force.
+        derive from one), every other load (a System's actuators included) an applied
+        force; Lagrange models are read from their Lagrangian.  What cannot be imported
+        (auxiliary speeds, non-smooth loads, a singular mass matrix, ...) raises a
+        :class:`~symmech.SceneError` naming the model's part.
         """
         return cls(**scene_arguments(model, walls=list(walls), name=name))
 

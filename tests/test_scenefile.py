@@ -22,6 +22,7 @@ import random
 import string
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -503,8 +504,22 @@ def _payload_cases() -> Iterator:
 
 # (id, text, field, line, fragments of the message); field and line None where the file
 # has none (a TOML syntax error has a line but no field).
-_LONG = "+".join(["y"] * 5001)
-_MANY_NODES = "+".join(["y"] * 2100)
+def _balanced(leaves: list[str], op: str = "+") -> str:
+    """``leaves`` joined by ``op`` as a balanced tree of brackets (depth log2 of their
+    number: no chain for Python's parser to recurse on)."""
+    while len(leaves) > 1:
+        pairs = range(0, len(leaves) - 1, 2)
+        leaves = [f"({leaves[i]}{op}{leaves[i + 1]})" for i in pairs] + leaves[len(pairs) * 2 :]
+    return leaves[0]
+
+
+# 5001 terms in brackets, 30 kB: longer than an entry could be before (10,000 characters);
+# a flat chain of that many is refused by Python's own parser (its recursion)
+_LONG = _balanced(["y"] * 5001)
+# 70,000 products: 210,000 nodes, over the file's MAX_FILE_NODES (420 kB, under its bytes)
+_MANY_NODES = _balanced(["m*y"] * 70_000)
+# 1,001 distinct applications of sin, over MAX_FILE_CALLS
+_MANY_CALLS = "+".join(f"sin({k}*y)" for k in range(1001))
 MALFORMED = [
     (
         "lambda",
@@ -574,18 +589,18 @@ MALFORMED = [
         ["nested more than 50 levels", "'('", "max_depth=50"],
     ),
     (
-        "very long expression",
-        scene_text(potential=_q(_LONG)),
-        "potential",
-        3,
-        [f"{len(_LONG)} characters long", "max_length=10000"],
-    ),
-    (
-        "too many nodes",
+        "too many nodes in the file",
         scene_text(potential=_q(_MANY_NODES)),
         "potential",
         3,
-        ["expression too large", "max_nodes=2000"],
+        ["expression too large", "MAX_FILE_NODES=200000"],
+    ),
+    (
+        "too many distinct function applications in the file",
+        scene_text(potential=_q(_MANY_CALLS)),
+        "potential",
+        3,
+        ["more than 1000 distinct arguments", "MAX_FILE_CALLS=1000"],
     ),
     (
         "unknown name",
@@ -1253,3 +1268,27 @@ def test_load_and_read_are_symmetric_for_paths_and_text(tmp_path):
     assert isinstance(sf_text, sm.SceneFile) and isinstance(sf_path, sm.SceneFile)
     assert {str(k): v for k, v in sf_text.defaults.items()} == {"m": 2}
     assert sf_text.defaults == sf_path.defaults
+
+
+def test_one_long_entry_loads_the_file_budget_bounds_the_cost():
+    """An entry's length alone is no reason to refuse (an imported model's forcing is
+    long); what the file's expressions cost together is bounded instead, so hostile
+    files are refused quickly: within MAX_FILE_NODES, within MAX_FILE_CALLS distinct
+    function applications (20,000 distinct ones took 67 s to build)."""
+    from symmech.scenefile import MAX_FILE_CALLS, MAX_FILE_NODES
+
+    scene = sm.loads_scene(scene_text(potential=_q("g*" + _LONG)))
+    assert scene.potential == 5001 * sp.Symbol("g", positive=True) * sp.Symbol("y", real=True)
+    hostile = {
+        "nodes": _MANY_NODES,
+        "calls": _balanced([f"sin(x*{k})*y" for k in range(20_000)]),
+        "chain": "+".join(["y"] * 250_000),
+    }
+    for what, expression in hostile.items():
+        text = scene_text(potential=_q(expression))
+        start = time.perf_counter()
+        with pytest.raises(SceneFileError) as info:
+            sm.loads_scene(text)
+        assert time.perf_counter() - start < 5.0, what
+        assert len(info.value.problems) == 1, info.value.problems
+    assert MAX_FILE_NODES >= 100_000 and MAX_FILE_CALLS >= 100  # room for imported models

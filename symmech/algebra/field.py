@@ -145,7 +145,10 @@ class RationalField:
         #: the sympy domain (a fraction field, or an exact ring/field), None when inexact
         self.K: Any = None
         if self.declined is None:
-            K, _ = construct_domain(replaced, field=True)
+            # every generator listed: construct_domain cancels first, and an entry that
+            # cancels to 0 would leave its symbols out of K (m * (a/b - a/b) in QQ)
+            gens = sorted(free_symbols_of(replaced), key=sp.default_sort_key)
+            K, _ = construct_domain(replaced + gens, field=True)
             self.K = None if K.is_EX or K.is_EXRAW else K
         self.pairs: list[tuple[int, int]] = []
         self._powers: dict[tuple[int, int], Any] = {}

@@ -16,7 +16,17 @@ dv_P/du^r`` of each mass centre and ``w_B,r = dw_B/du^r`` of each rigid body's a
 velocity in the inertial frame,
 ``M_rs = sum_bodies m v_P,r . v_P,s + w_B,r . I_B . w_B,s`` (I_B the central inertia),
 so ``T = 1/2 u^T M u``.  Velocities with a part free of the speeds (a point driven along
-a prescribed path, a moving frame) are refused: symmech's systems are scleronomic.
+a prescribed path, a moving frame) are refused: symmech's systems are scleronomic.  A
+metric singular only off the constraints (dependent speeds no body's velocity uses) gets
+``mu^T mu`` added (:func:`_regular_metric`); one singular on them is refused, naming the
+velocities of its kernel.  Bodies' ``potential_energy`` is ignored, as KanesMethod
+ignores it.
+
+Lagrange models (``LagrangesMethod``, a ``System`` with ``eom_method=LagrangesMethod``
+or whose joints' speeds are the q_dots) are read from their Lagrangian L (for the
+System, ``Lagrangian(frame, *bodies)``, which holds the bodies' potential energies):
+M is its Hessian in q_dot, V minus its value at q_dot = 0; ``frame=`` is needed only
+for loads.
 
 Loads.  A force R at P contributes Kane's generalized active force ``F_r = R . v_P,r``; a
 torque on B, ``tau . w_B,r``.  A force constant in the inertial frame is conservative:
@@ -24,7 +34,9 @@ it becomes the potential ``-R . r_OP`` (O the point P's position is measured fro
 ``F = -S^T dV/dq`` holds identically (checked at random points; it fails, and the load
 stays a force, when P's velocity was set by a rolling constraint that the position does
 not follow).  Every other load is an applied force (velocity- or input-dependent ones too:
-``tau(t)`` becomes a run-time input).
+``tau(t)`` becomes a run-time input); q_dot in a load is replaced by ``S u``, as
+KanesMethod does.  A ``System``'s actuators contribute their ``to_loads()``, as
+``System.form_eoms`` adds them (``System.loads`` leaves them out).
 
 Constraints.  Velocity (non-holonomic) constraints ``k_nh u + f_nh = 0`` must be
 homogeneous (``f_nh = 0``); holonomic constraints ``f_h(q) = 0`` enter by their
@@ -36,184 +48,33 @@ derivative) are dropped.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
+import numpy as np
 import sympy as sp
 
+from symmech.algebra.numeric import EvaluationError, evaluate_matrix
 from symmech.algebra.rank import rank_at
 from symmech.algebra.walk import atoms
 from symmech.algebra.zero import is_zero
+from symmech.declaration.admissible import NON_SMOOTH
 from symmech.declaration.checks import Points
 from symmech.declaration.dynamic import DynamicTranslation
 from symmech.errors import SceneError
+from symmech.mechanics.model import Model, mechanics
 
 __all__ = ["scene_arguments"]
 
 
-def _me():
-    from sympy.physics import mechanics
-
-    return mechanics
-
-
-def _model_kind(model: object) -> str:
-    me = _me()
-    if isinstance(model, me.KanesMethod):
-        return "kane"
-    if isinstance(model, me.LagrangesMethod):
-        return "lagrange"
-    if isinstance(model, me.System):
-        return "system"
-    raise SceneError(
-        f"from_mechanics: expected a KanesMethod, LagrangesMethod or System, got"
-        f" {type(model).__name__}"
-    )
-
-
-class _Model:
-    """What the import needs from any of the three model kinds."""
-
-    q: list[sp.Expr]
-    basis: list[sp.Expr]  # u, or q_dot (Derivative(q(t), t))
-    S: sp.Matrix | None  # q_dot = S u; None for the q_dot basis
-    frame: Any
-    bodies: list[Any]
-    loads: list[Any]
-    velocity_rows: list[list[sp.Expr]]  # k u + f = 0 rows, checked homogeneous
-    velocity_offsets: list[sp.Expr]
-    holonomic: list[sp.Expr]
-    origin: Any = None
-    lagrangian: sp.Expr | None = None  # a LagrangesMethod built from L alone (no bodies)
-
-    def __init__(self, model: object):
-        self.partials: dict = {}
-        me = _me()
-        t = me.dynamicsymbols._t
-        kind = _model_kind(model)
-        if kind == "kane":
-            k: Any = model
-            self.q = list(k.q)
-            self.frame = k._inertial
-            self.bodies = list(k.bodies or [])
-            self.loads = list(k.loads or [])
-            self._speeds(list(k.u), k.kindiffdict(), "KanesMethod")
-            self.velocity_rows, self.velocity_offsets = [], []
-            if k._k_nh is not None and k._k_nh.rows:
-                self._rows_from(k._k_nh, k._f_nh)
-            self.holonomic = list(k._f_h) if k._f_h is not None else []
-        elif kind == "lagrange":
-            lm: Any = model
-            self.q = list(lm.q)
-            self.frame = lm.inertial
-            if self.frame is None:
-                raise SceneError("from_mechanics: LagrangesMethod needs its frame= (inertial)")
-            self.bodies = list(lm._bodies or [])
-            self.loads = list(lm.forcelist or [])
-            self.basis = [c.diff(t) for c in self.q]
-            self.S = None
-            self.velocity_rows, self.velocity_offsets = [], []
-            if lm.coneqs:
-                cons = sp.Matrix(lm.coneqs)
-                K = cons.jacobian(self.basis)
-                self._rows_from(K, cons - K * sp.Matrix(self.basis))
-            self.holonomic = []  # LagrangesMethod differentiates them into coneqs
-            if not self.bodies:
-                L = lm._L
-                self.lagrangian = (
-                    L[0] if isinstance(L, sp.MatrixBase) else sp.sympify(L, strict=True)
-                )
-        else:
-            s: Any = model
-            self.q = list(s.q)
-            self.frame = s.frame
-            self.origin = s.fixed_point
-            self.bodies = list(s.bodies)
-            self.loads = list(s.loads)
-            if s.u_aux.shape[0]:
-                raise SceneError("from_mechanics: auxiliary speeds are not supported")
-            if s.u.shape[0]:
-                sol = sp.solve(list(s.kdes), [c.diff(t) for c in self.q], dict=True)
-                if len(sol) != 1:
-                    raise SceneError(
-                        "from_mechanics: the System's kinematic differential equations do not"
-                        " give q_dot uniquely"
-                    )
-                self._speeds(list(s.u), sol[0], "System")
-            else:
-                self.basis = [c.diff(t) for c in self.q]
-                self.S = None
-            self.velocity_rows, self.velocity_offsets = [], []
-            nh = sp.Matrix(s.nonholonomic_constraints)
-            if nh.rows:
-                nh = nh.xreplace(self._qdot_map())
-                K = nh.jacobian(self.basis)
-                self._rows_from(K, nh - K * sp.Matrix(self.basis))
-            self.holonomic = list(s.holonomic_constraints)
-        if self.S is None:
-            self._check_basis_names()
-
-    # -- helpers --------------------------------------------------------------------------
-    def _speeds(self, u: list[sp.Expr], qdot_map: dict, source: str) -> None:
-        me = _me()
-        t = me.dynamicsymbols._t
-        qd = [c.diff(t) for c in self.q]
-        missing = [d for d in qd if d not in qdot_map]
-        if missing:
-            raise SceneError(
-                f"from_mechanics: the {source} kinematic differential equations do not give"
-                f" {missing}"
-            )
-        rhs = sp.Matrix([qdot_map[d] for d in qd])
-        S = rhs.jacobian(u)
-        offset = (rhs - S * sp.Matrix(u)).applyfunc(sp.expand)
-        if any(e != 0 for e in offset):
-            raise SceneError(
-                f"from_mechanics: the kinematic differential equations must read q_dot = S(q) u;"
-                f" {list(offset)} is left over (a part free of the speeds)"
-            )
-        if any(a.has(*u) or a.has(*qd) for a in S):
-            raise SceneError("from_mechanics: q_dot = S u with S depending on the speeds")
-        # speeds no kinematic equation reaches get an ignorable coordinate
-        extra = [r for r in range(len(u)) if all(S[i, r] == 0 for i in range(S.rows))]
-        if S.rows + len(extra) != len(u):
-            raise SceneError(
-                f"from_mechanics: {len(self.q)} coordinates and {len(u)} speeds; the speeds"
-                f" {[u[r] for r in extra]} reach no coordinate, which leaves the frame S"
-                " non-square"
-            )
-        taken = {str(c.func) for c in (*self.q, *u)}
-        for r in extra:
-            name = f"q_{u[r].func}"
-            while name in taken:
-                name += "_"
-            taken.add(name)
-            self.q.append(me.dynamicsymbols(name))
-            S = S.col_join(sp.Matrix([[1 if c == r else 0 for c in range(len(u))]]))
-        self.basis, self.S = u, S
-        self._qdot = dict(zip([c.diff(t) for c in self.q], list(S * sp.Matrix(u)), strict=True))
-
-    def _qdot_map(self) -> dict:
-        return getattr(self, "_qdot", {})
-
-    def _rows_from(self, K: sp.Matrix, offset: sp.Matrix) -> None:
-        for a in range(K.rows):
-            self.velocity_rows.append(list(K.row(a)))
-            self.velocity_offsets.append(sp.expand(offset[a]))
-
-    def _check_basis_names(self) -> None:
-        names = [str(c.func) for c in self.q]
-        if len(set(names)) != len(names):
-            raise SceneError(f"from_mechanics: repeated coordinate names {names}")
-
-
-def _in_basis(vec: Any, model: _Model) -> Any:
+def _in_basis(vec: Any, model: Model) -> Any:
     """A velocity vector with q_dot replaced by S u (the Kane case)."""
     qmap = model._qdot_map()
     return vec.xreplace(qmap) if qmap else vec
 
 
-def _partials(vec: Any, model: _Model, what: str) -> list[Any]:
+def _partials(vec: Any, model: Model, what: str) -> list[Any]:
     """The partial velocities d vec / d w^r, after checking vec is linear with no offset
     (computed once per vector, whatever the caller: the metric, the loads and the inertia
     forces share them; ``what`` names it in the error of the first)."""
@@ -223,7 +84,7 @@ def _partials(vec: Any, model: _Model, what: str) -> list[Any]:
     return hit
 
 
-def _partials_of(vec: Any, model: _Model, what: str) -> list[Any]:
+def _partials_of(vec: Any, model: Model, what: str) -> list[Any]:
     frame = model.frame
     vec = _in_basis(vec, model)
     parts = [vec.diff(w, frame, var_in_dcm=False) for w in model.basis]
@@ -260,9 +121,9 @@ def _dot(a: Any, b: Any, expand: bool = True) -> sp.Expr:
     return sp.expand(sp.Add(*terms))
 
 
-def _metric(model: _Model) -> sp.Matrix:
+def _metric(model: Model) -> sp.Matrix:
     """M_rs = sum m v_P,r . v_P,s + w_B,r . I_B . w_B,s (module docstring)."""
-    me = _me()
+    me = mechanics()
     n = len(model.basis)
     M = sp.zeros(n, n)
     for body in model.bodies:
@@ -287,10 +148,12 @@ def _metric(model: _Model) -> sp.Matrix:
     return M
 
 
-def _from_lagrangian(model: _Model) -> tuple[sp.Matrix, sp.Expr]:
+def _from_lagrangian(model: Model) -> tuple[sp.Matrix, sp.Expr]:
     """(M, V) of a Lagrangian ``L = 1/2 q_dot^T M q_dot - V``: M its Hessian in q_dot, V
     minus its value at q_dot = 0; a part linear in q_dot (gyroscopic, a moving frame) is
     refused."""
+    from symmech.algebra.simplification import normal_form
+
     L = sp.expand(model.lagrangian)
     qd = model.basis
     M = sp.hessian(L, qd).applyfunc(sp.expand)
@@ -301,7 +164,7 @@ def _from_lagrangian(model: _Model) -> tuple[sp.Matrix, sp.Expr]:
             f"from_mechanics: the Lagrangian has terms linear in the velocities ({linear});"
             " symmech takes L = T - V with T quadratic"
         )
-    return M, -L0
+    return M.applyfunc(normal_form), -L0
 
 
 def _origin(point: Any, frame: Any) -> Any:
@@ -322,21 +185,23 @@ def _origin(point: Any, frame: Any) -> Any:
 
 
 def _constant_in(vec: Any, frame: Any) -> bool:
-    me = _me()
+    me = mechanics()
     t = me.dynamicsymbols._t
     comps = vec.to_matrix(frame)
     return not any(e.has(t) for e in comps)
 
 
-def _loads(model: _Model) -> tuple[sp.Expr, list[sp.Expr]]:
+def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
     """(V, F): the potential of the verified conservative forces and the other loads'
     generalized active forces (module docstring)."""
-    me = _me()
+    me = mechanics()
     n = len(model.basis)
     V = sp.S.Zero
     F = [sp.S.Zero] * n
     for load in model.loads:
-        where, vector = load[0], load[1]
+        # q_dot in a load is replaced by S u, as KanesMethod does (its _form_fr)
+        where, vector = load[0], _in_basis(load[1], model)
+        _refuse_non_smooth(vector.to_matrix(model.frame), f"the load on {where}")
         if isinstance(where, me.ReferenceFrame):
             w = _partials(where.ang_vel_in(model.frame), model, f"torque on {where}")
             F = [a + _dot(vector, b) for a, b in zip(F, w, strict=True)]
@@ -370,7 +235,7 @@ def _identically_zero(exprs: Sequence[sp.Expr]) -> bool:
     return all(is_zero(e, points.for_(e)) is True for e in ordered)
 
 
-def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: _Model) -> bool:
+def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: Model) -> bool:
     """Whether ``F_r = -(S^T dV/dq)_r`` holds at random points (ties the candidate potential
     to the force's generalized active force)."""
     grad = sp.Matrix([sp.diff(V, c) for c in model.q])
@@ -378,7 +243,22 @@ def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: _Model) -> bool:
     return _identically_zero([a + b for a, b in zip(lhs, Fr, strict=True)])
 
 
-def _constraint_rows(model: _Model) -> list[list[sp.Expr]]:
+def _refuse_non_smooth(exprs: Any, what: str) -> None:
+    """Refuse a part of the model holding a non-smooth function (``Abs``, ``sign`` ...:
+    :data:`~symmech.declaration.admissible.NON_SMOOTH`), naming it: symmech differentiates
+    every part (Christoffel symbols, gradients, impact maps)."""
+    found = sorted(
+        {type(f).__name__ for e in exprs for f in sp.sympify(e, strict=True).atoms(*NON_SMOOTH)}
+    )
+    if found:
+        raise SceneError(
+            f"from_mechanics: {what} contains the non-smooth functions {found} (Coulomb"
+            " friction, a simplified square root ...); symmech needs smooth loads and"
+            " kinematics: write it without them (a smooth law such as tanh(v/eps) for sign)"
+        )
+
+
+def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
     """The velocity constraints and the differentiated holonomic ones, independent rows."""
     bad = [e for e in model.velocity_offsets if e != 0]
     if bad:
@@ -404,11 +284,15 @@ def _constraint_rows(model: _Model) -> list[list[sp.Expr]]:
     return [rows[a] if a < first else [sp.expand(e) for e in rows[a]] for a in kept]
 
 
-def _inertia_forcing(model: _Model) -> list[sp.Expr]:
+def _inertia_forcing(model: Model) -> list[sp.Expr]:
     """Kane's generalized inertia forces without the u_dot terms (slides 000, Kane's
     method): ``-sum m a0_P . v_P,r - (I . alpha0 + w x I . w) . w_r`` where ``a0`` and
-    ``alpha0`` are the accelerations with ``u_dot = 0`` (``q_dot = S u`` substituted)."""
-    me = _me()
+    ``alpha0`` are the accelerations with ``u_dot = 0`` (``q_dot = S u`` substituted).
+    An acceleration the model set (``a2pt_theory``, ``set_acc``, ``set_ang_acc``) is
+    used as set, as KanesMethod uses it, even where it is not the derivative of the
+    velocity (sympy's ``test_kane.py::test_aux``: ``a2pt_theory`` through a frame the
+    vector is not fixed in)."""
+    me = mechanics()
     t = me.dynamicsymbols._t
     frame = model.frame
     n = len(model.basis)
@@ -417,13 +301,17 @@ def _inertia_forcing(model: _Model) -> list[sp.Expr]:
     for body in model.bodies:
         v = _in_basis(body.masscenter.vel(frame), model)
         parts = _partials(body.masscenter.vel(frame), model, f"{body}: mass centre velocity")
-        a0 = _in_basis(v.dt(frame).xreplace(still), model)
+        given = body.masscenter._acc_dict.get(frame)
+        a0 = _as_set(given, model) if given is not None else v.dt(frame)
+        a0 = _in_basis(a0.xreplace(still), model)
         for r in range(n):
             f[r] -= body.mass * _dot(a0, parts[r], expand=False)
         if isinstance(body, me.RigidBody):
             w = _in_basis(body.frame.ang_vel_in(frame), model)
             wparts = _partials(body.frame.ang_vel_in(frame), model, f"{body}: angular velocity")
-            alpha0 = _in_basis(w.dt(frame).xreplace(still), model)
+            given = body.frame._ang_acc_dict.get(frame)
+            alpha0 = _as_set(given, model) if given is not None else w.dt(frame)
+            alpha0 = _in_basis(alpha0.xreplace(still), model)
             inertia = body.central_inertia
             torque = (inertia & alpha0) + (w ^ (inertia & w))
             for r in range(n):
@@ -431,8 +319,24 @@ def _inertia_forcing(model: _Model) -> list[sp.Expr]:
     return f
 
 
+def _as_set(acc: Any, model: Model) -> Any:
+    """An acceleration the model set, in the velocity basis: ``q_ddot`` replaced by the
+    derivative of ``S u`` (the q_dots of the Lagrange basis are the basis itself)."""
+    t = mechanics().dynamicsymbols._t
+    qdot = model._qdot_map()
+    if not qdot:
+        return acc
+    qddot = {d.diff(t): _in_basis_expr(e.diff(t), model) for d, e in qdot.items()}
+    return acc.xreplace(qddot)
+
+
+def _in_basis_expr(e: sp.Expr, model: Model) -> sp.Expr:
+    qmap = model._qdot_map()
+    return e.xreplace(qmap) if qmap else e
+
+
 def _embedded_correction(
-    model: _Model, tr: DynamicTranslation, M: sp.Matrix, S: sp.Matrix | None
+    model: Model, tr: DynamicTranslation, M: sp.Matrix, S: sp.Matrix | None
 ) -> list[sp.Expr] | None:
     """Kane's velocity-quadratic inertia forces minus those the metric ``M`` and frame
     ``S`` (both already in symmech's symbols) give
@@ -459,6 +363,65 @@ def _embedded_correction(
     return None if _identically_zero(diff) else diff
 
 
+def _singular(M: sp.Matrix) -> tuple[bool, dict]:
+    """Whether ``M`` is singular at two sampled points (with the first of them)."""
+    points = Points([]).for_(M)[:2]
+    try:
+        return all(rank_at(M, p) < M.rows for p in points), points[0]
+    except EvaluationError:  # no value there: the declaration judges it
+        return False, points[0]
+
+
+def _regular_metric(M: sp.Matrix, rows: list[list[sp.Expr]], model: Model) -> sp.Matrix:
+    """``M``, or ``M + mu^T mu`` when M is singular but positive definite on the kernel of
+    the constraint rows ``mu``; else a refusal naming the velocities of M's kernel.
+
+    A contact point given the dependent speeds' velocity that no body's velocity uses
+    (sympy's ``test_kane5`` rolling disc) leaves M singular, the motion still determined
+    on ``mu v = 0``.  The added energy ``|mu v|^2 / 2`` is zero to second order on that
+    set, so it changes neither the constrained accelerations (its Euler-Lagrange terms
+    ``mu^T d/dt(mu v)`` are constraint forces) nor the impact laws (``g^-1`` of the
+    constraint and wall covectors spans the same velocities)."""
+    singular, point = _singular(M)
+    if not singular:
+        return M
+    if not model.bodies and model.lagrangian is None:
+        raise SceneError(
+            "from_mechanics: the model has no bodies (its equations were formed with an"
+            " empty body list): there is no kinetic energy, and symmech needs one"
+        )
+    if rows:
+        mu = sp.Matrix(rows)
+        augmented = (M + mu.T * mu).applyfunc(sp.expand)
+        if not _singular(augmented)[0]:
+            return augmented
+    A = evaluate_matrix(M, point).real
+    _, sing, Vt = np.linalg.svd(A)
+    kernel = Vt[sing <= sing[0] * 1e-9] if sing[0] > 0 else Vt
+    involved = [w for k, w in enumerate(model.basis) if np.abs(kernel[:, k]).max() > 1e-8]
+    where = " on the constraints' kernel" if rows else ""
+    raise SceneError(
+        f"from_mechanics: the kinetic metric of the model's bodies is singular{where}: no"
+        f" body's kinetic energy fixes the velocities {involved} (sympy issue 24887: three"
+        " speeds for a particle's orientation); symmech needs a positive definite metric"
+        " (give those motions inertia, or leave out the speeds they do not need)"
+    )
+
+
+@contextmanager
+def _reading(kind: str, what: str) -> Iterator[None]:
+    """Turn a failure of sympy (or of symmech's algebra) while reading ``what`` of the
+    model into a :class:`SceneError` naming the model and that part."""
+    try:
+        yield
+    except SceneError:
+        raise
+    except (ValueError, TypeError, ArithmeticError, AttributeError, NotImplementedError) as exc:
+        raise SceneError(
+            f"from_mechanics: {kind}: reading {what} failed ({type(exc).__name__}: {exc})"
+        ) from exc
+
+
 def scene_arguments(model: object, *, walls: Sequence = (), name: str | None = None) -> dict:
     """The keyword arguments of :class:`symmech.Scene` for a mechanics model (module
     docstring): coordinates, metric, potential, forces, constraints, frame and
@@ -467,26 +430,46 @@ def scene_arguments(model: object, *, walls: Sequence = (), name: str | None = N
     as the declaration would translate them: the correction of the inertia forces needs
     the metric and frame in symmech's symbols, and the declaration then has nothing left
     to translate."""
-    model_ = _Model(model)
+    kind = type(model).__name__
+    with _reading(kind, "its coordinates, speeds and kinematic equations"):
+        model_ = Model(model)
+    with _reading(kind, "its bodies and loads"):
+        return _arguments(model_, kind, walls, name)
+
+
+def _arguments(model_: Model, kind: str, walls: Sequence, name: str | None) -> dict:
+    """:func:`scene_arguments` of the model read."""
     framed = model_.S is not None
-    tr = DynamicTranslation(model_.q, model_.basis if framed else None, _me().dynamicsymbols._t)
+    tr = DynamicTranslation(
+        model_.q, model_.basis if framed else None, mechanics().dynamicsymbols._t
+    )
 
     def plain(value: Any, field: str) -> Any:
         return tr.expr(value, field)
 
     S = plain(model_.S, "frame") if framed else None
+    with _reading(kind, "the constraints"):
+        model_rows = _constraint_rows(model_)
     if model_.lagrangian is not None:
-        M, V0 = _from_lagrangian(model_)
-        V, F = _loads(model_)
+        with _reading(kind, "its Lagrangian"):
+            M, V0 = _from_lagrangian(model_)
+        M = _regular_metric(M, model_rows, model_)
+        with _reading(kind, "the loads"):
+            V, F = _loads(model_)
         M, V, F = plain(M, "metric"), plain(V + V0, "potential"), plain(F, "forces")
     else:
-        M = plain(_metric(model_), "metric")
-        V, F = _loads(model_)
+        with _reading(kind, "the bodies' masses, inertias and velocities"):
+            M = plain(_regular_metric(_metric(model_), model_rows, model_), "metric")
+        with _reading(kind, "the loads"):
+            V, F = _loads(model_)
         V, F = plain(V, "potential"), plain(F, "forces")
-        correction = _embedded_correction(model_, tr, M, S)
+        with _reading(kind, "Kane's inertia forces"):
+            correction = _embedded_correction(model_, tr, M, S)
         if correction is not None:
             F = [a + b for a, b in zip(F, correction, strict=True)]
-    rows = [plain(r, f"constraints[{a}]") for a, r in enumerate(_constraint_rows(model_))]
+    rows = [plain(r, f"constraints[{a}]") for a, r in enumerate(model_rows)]
+    # (after the translation to real symbols, where sqrt(q**2) becomes Abs(q))
+    _refuse_non_smooth([e for r in rows for e in r], "a velocity or configuration constraint")
     out: dict[str, Any] = {
         "metric": M,
         "potential": V,

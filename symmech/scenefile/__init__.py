@@ -91,10 +91,12 @@ Rules:
   in generated code and files).
 * Unknown keys are refused (with a suggestion), so a misspelt key is not silently ignored.
 
-Limits: :data:`MAX_FILE_BYTES` bytes of file, :data:`MAX_NAMES` coordinates or parameters,
-:data:`MAX_WALLS` walls, integers of at most
-:data:`~symmech.declaration.expressions.MAX_DIGITS` digits; each expression has the
-parser's limits on length, node count, depth and exponent size.
+Limits, by what reading costs: :data:`MAX_FILE_BYTES` bytes of file, :data:`MAX_NAMES`
+coordinates or parameters, :data:`MAX_WALLS` walls, :data:`MAX_FILE_NODES` operands and
+operations and :data:`MAX_FILE_CALLS` distinct function applications in all the
+expressions together (an entry may be as long as the file allows: an imported model's
+forcing is), integers of at most :data:`~symmech.declaration.expressions.MAX_DIGITS`
+digits; each expression has the parser's limits on depth and exponent size.
 
 Errors raise :class:`SceneFileError` (a :class:`~symmech.SceneError`) listing every problem,
 each naming the file, the field (``walls[0].psi``), the line and the offending token.  When
@@ -135,6 +137,8 @@ from symmech.scenefile.builtin import builtin_scene_names, builtin_scene_path
 from symmech.scenefile.format import (
     FORMAT_VERSION,
     MAX_FILE_BYTES,
+    MAX_FILE_CALLS,
+    MAX_FILE_NODES,
     MAX_NAMES,
     MAX_WALLS,
     SIGNS,
@@ -147,6 +151,8 @@ from symmech.scenefile.writer import dump_scene, save_scene
 __all__ = [
     "FORMAT_VERSION",
     "MAX_FILE_BYTES",
+    "MAX_FILE_CALLS",
+    "MAX_FILE_NODES",
     "MAX_NAMES",
     "MAX_WALLS",
     "SIGNS",

@@ -19,6 +19,17 @@ MAX_FILE_BYTES = 1_000_000
 MAX_NAMES = 200
 #: Largest number of walls.
 MAX_WALLS = 100
+#: Largest number of operands, operations and calls in all the expressions of a file
+#: together (the parser's nodes; each expression may use what the others left).  The
+#: cost of reading a file grows with it, not with the length of one entry: the imported
+#: Whipple bicycle holds about 63,000 (forcing entries of 53,000 characters); a file of
+#: MAX_FILE_BYTES holds at most about 500,000.
+MAX_FILE_NODES = 200_000
+#: Largest number of distinct function applications (``sin(x*3)``, as written) in all the
+#: expressions of a file together.  Building one costs sympy up to milliseconds (a
+#: trigonometric function looks for multiples of pi), repeating one costs nothing (sympy's
+#: cache): the bicycle writes 14,000 applications of 8 distinct ones.
+MAX_FILE_CALLS = 1_000
 
 #: Signs a parameter may be declared with, and the sympy assumptions they give.
 SIGNS: Mapping[str, dict[str, bool]] = {

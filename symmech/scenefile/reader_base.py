@@ -20,6 +20,9 @@ from symmech.errors import ExpressionError
 from symmech.scenefile.format import (
     _IDENTIFIER,
     _MAX_IDENTIFIER,
+    MAX_FILE_BYTES,
+    MAX_FILE_CALLS,
+    MAX_FILE_NODES,
     _allowed_kinds,
     _clip,
     _did_you_mean,
@@ -28,6 +31,35 @@ from symmech.scenefile.format import (
     _toml_type,
 )
 from symmech.scenefile.locate import _Locator
+
+
+def applications(text: str) -> set[str]:
+    """Every function application ``name(...)`` written in ``text`` (nested ones too), by
+    one scan matching brackets: the name and the text up to its closing bracket."""
+    found: set[str] = set()
+    opened: list[int] = []  # where each open bracket's application starts (-1: none)
+    for k, ch in enumerate(text):
+        if ch == "(":
+            j = k
+            while j > 0 and (text[j - 1].isalnum() or text[j - 1] == "_"):
+                j -= 1
+            opened.append(j if j < k and not text[j].isdigit() else -1)
+        elif ch == ")" and opened:
+            start = opened.pop()
+            if start >= 0:
+                found.add(text[start : k + 1])
+    return found
+
+
+def tree_size(expr: sp.Basic) -> int:
+    """The number of nodes of ``expr``'s tree, a subtree counted where it occurs (what
+    the file's text spelt out), by an iterative walk."""
+    count, stack = 0, [expr]
+    while stack:
+        e = stack.pop()
+        count += 1
+        stack.extend(e.args)
+    return count
 
 
 class _LoaderBase:
@@ -55,6 +87,12 @@ class _LoaderBase:
         # would be reported again as an unknown name
         self.names_refused = False
         self.defaults: dict[sp.Symbol, sp.Expr] = {}
+        #: the nodes the file's expressions may still use (MAX_FILE_NODES in all)
+        self.nodes_left = MAX_FILE_NODES
+        #: the function applications the file's expressions wrote (MAX_FILE_CALLS at most)
+        self.calls: set[str] = set()
+        #: set when a budget ran out: the other expressions are not read (one problem)
+        self.over_budget = False
 
     # -- small helpers ---------------------------------------------------------------------
     def line(self, table: str | None, key: str, index: int = 0) -> int | None:
@@ -160,10 +198,47 @@ class _LoaderBase:
             return sp.Integer(value) if isinstance(value, int) else sp.Float(value)
         # the line where the text starts: a multi-line string's content starts below its key
         line = self.loc.element(line, value)
+        if self.over_budget:
+            return None  # (reported once, where the file's budget ran out)
+        if self.nodes_left <= 0:
+            self._over_budget(
+                f"the file's expressions hold more than {MAX_FILE_NODES} operands and"
+                f" operations together (limit MAX_FILE_NODES={MAX_FILE_NODES})",
+                field,
+                line,
+            )
+            return None
+        self.calls |= applications(value)
+        if len(self.calls) > MAX_FILE_CALLS:
+            self._over_budget(
+                f"the file's expressions apply functions to more than {MAX_FILE_CALLS}"
+                f" distinct arguments together (limit MAX_FILE_CALLS={MAX_FILE_CALLS})",
+                field,
+                line,
+            )
+            return None
         try:
-            expr = parse_expression(value, table, field=field, line=line)
+            # each expression may use what the file's budget has left (the file's size
+            # bounds its length)
+            expr = parse_expression(
+                value,
+                table,
+                field=field,
+                line=line,
+                max_length=MAX_FILE_BYTES,
+                max_nodes=self.nodes_left,
+            )
         except ExpressionError as exc:
             token = getattr(exc, "token", None)
+            if "expression too large" in str(exc):
+                self._over_budget(
+                    f"expression too large: the file's expressions hold more than"
+                    f" {MAX_FILE_NODES} operands and operations together (limit"
+                    f" MAX_FILE_NODES={MAX_FILE_NODES})",
+                    field,
+                    getattr(exc, "line", line),
+                )
+                return None
             if token in self.function_names and "not a function" in str(exc):
                 self.fail(
                     f"'{token}' is a function of time: write it by name alone ('{token}'"
@@ -186,7 +261,12 @@ class _LoaderBase:
                 self.problems.expression_error(exc, field)
             return None
         self.used |= expr.free_symbols
+        self.nodes_left -= tree_size(expr)
         return expr
+
+    def _over_budget(self, message: str, field: str, line: int | None) -> None:
+        self.over_budget = True
+        self.fail(message, field, line)
 
     def string_list(self, value: object, field: str, line: int | None) -> list[str] | None:
         if not isinstance(value, list) or not all(isinstance(s, str) for s in value):

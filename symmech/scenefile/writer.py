@@ -24,10 +24,14 @@ from symmech.scenefile.format import (
     _IDENTIFIER,
     _MAX_IDENTIFIER,
     FORMAT_VERSION,
+    MAX_FILE_BYTES,
+    MAX_FILE_CALLS,
+    MAX_FILE_NODES,
     SIGNS,
     SceneFileError,
     _short,
 )
+from symmech.scenefile.reader_base import applications, tree_size
 
 # ---------------------------------------------------------------------------------------
 # writing
@@ -65,7 +69,9 @@ def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -
         raise SceneFileError([f"{where}: cannot write {_short(expr, 60)}: it holds a derivative"])
     text = _FilePrinter().doprint(expr)
     try:
-        back = parse_expression(text, table, field=where)
+        back = parse_expression(
+            text, table, field=where, max_length=MAX_FILE_BYTES, max_nodes=MAX_FILE_NODES
+        )
     except ExpressionError as exc:
         raise SceneFileError(
             [f"{where}: cannot write {_short(expr, 60)} as a scene-file expression ({exc})"]
@@ -330,7 +336,28 @@ def dump_scene(
                 _toml_value(c, f"{label}.velocity[{j}]", table) for j, c in enumerate(w.velocity)
             ]
             lines.append("velocity = [" + ", ".join(comps) + "]")
-    return "\n".join(lines) + "\n"
+    text = "\n".join(lines) + "\n"
+    _check_readable(text, decl.expressions())
+    return text
+
+
+def _check_readable(text: str, exprs: Sequence[sp.Expr]) -> None:
+    """Refuse to write what the reader would refuse by its cost limits (the file's bytes,
+    nodes and distinct function applications: :mod:`symmech.scenefile.format`)."""
+    size = len(text.encode("utf-8"))
+    nodes = sum(tree_size(sp.sympify(e, strict=True)) for e in exprs)
+    calls = len(applications(text))
+    over = [
+        f"{what} {value} (limit {name}={limit})"
+        for what, value, name, limit in (
+            ("bytes", size, "MAX_FILE_BYTES", MAX_FILE_BYTES),
+            ("operands and operations", nodes, "MAX_FILE_NODES", MAX_FILE_NODES),
+            ("distinct function applications", calls, "MAX_FILE_CALLS", MAX_FILE_CALLS),
+        )
+        if value > limit
+    ]
+    if over:
+        raise SceneFileError([f"the scene is too large for a scene file: {'; '.join(over)}"])
 
 
 def save_scene(
