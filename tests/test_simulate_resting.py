@@ -139,3 +139,33 @@ def test_c_builds_the_contact_modes_a_run_reaches_and_batches_agree_with_single_
         np.testing.assert_array_equal(c.q[-1], batch.q[i])
         assert [(e.kind, e.wall) for e in c.events] == [(e.kind, e.wall) for e in py.events]
         np.testing.assert_allclose(c.q[-1], py.q[-1], atol=1e-9)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_the_ladder_falls_flat_and_its_top_lands_while_the_foot_is_held(backend):
+    """After leaving the wall the ladder falls; its top strikes the floor while the foot is
+    held (an impact during a resting contact, resolved with the held wall: one impact, no
+    cascade of partial ones), and it lies flat, sliding at the horizontal speed it had when
+    it left the wall (no horizontal force acts after that).  The impact equals the
+    closed-form map of the pair {floor, top_floor} at that state."""
+    scene = sm.load_scene("ladder")
+    theta0 = 1.2
+    res = sm.simulate(
+        scene, [math.cos(theta0), math.sin(theta0), theta0], [0.0, 0.0, 0.0], 1.0,
+        params=LADDER, backend=backend, rtol=1e-10, atol=1e-12,
+    )  # fmt: skip
+    assert res.status == "finished", res.message
+    kinds = [(e.kind, e.wall_name) for e in res.events]
+    assert kinds == [
+        ("contact", "floor"), ("contact", "wall"), ("release", "wall"),
+        ("impact", "top_floor"), ("contact", "top_floor"),
+    ]  # fmt: skip
+    vx = res.events[2].v_plus[0]
+    np.testing.assert_allclose(res.v[-1], [vx, 0.0, 0.0], atol=1e-9)
+    np.testing.assert_allclose(res.q[-1, 1:], [0.0, 0.0], atol=1e-10)
+    hit = res.events[3]
+    pair = scene.impact_map(["floor", "top_floor"])
+    values = {p: LADDER[str(p)] for p in scene.parameters}
+    values.update(dict(zip(scene.declaration.coordinates, hit.q, strict=True)))
+    want = np.array(pair.apply(list(hit.v_minus)).xreplace(values), dtype=float).ravel()
+    np.testing.assert_allclose(hit.v_plus, want, atol=1e-9)

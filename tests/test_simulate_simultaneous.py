@@ -38,7 +38,7 @@ def first_impact(res: sm.SimulationResult) -> np.ndarray:
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("alpha", [0.5, 1.0])
+@pytest.mark.parametrize("alpha", [0.0, 0.5, 1.0])
 def test_a_rod_landing_flat_rebounds_straight_up_whatever_the_wall_order(backend, alpha):
     h, g = 1.0, ROD["g"]
     t_land = math.sqrt(2 * h / g)

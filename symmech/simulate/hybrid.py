@@ -473,20 +473,26 @@ class _Run:
 
     def simultaneous_group(self) -> list[tuple[int, float]]:
         """The walls closed and approaching now (:meth:`approaching_walls`) when the law
-        resolves them together: two or more, each with a Newton direction, in free
-        flight, at most MAX_SIMULTANEOUS; else empty (one wall at a time)."""
-        if self.o.impact_law != "simultaneous" or self.mode:
+        resolves them together: two or more (or one, while walls are held: it is resolved
+        with them), each with a Newton direction, the held walls too, at most
+        MAX_SIMULTANEOUS in all; else empty (one wall at a time)."""
+        if self.o.impact_law != "simultaneous":
             return []
         group = self.approaching_walls()
-        if not 2 <= len(group) <= MAX_SIMULTANEOUS:
+        size = len(group) + len(self.mode)
+        if not group or size < 2 or size > MAX_SIMULTANEOUS:
             return []
-        if not all(self.f.simultaneous[w] for w, _ in group):
+        if not all(self.f.simultaneous[w] for w in [*(w for w, _ in group), *self.mode]):
             return []
         return group
 
     def impact_together(self, group: list[tuple[int, float]]) -> list[int] | None:
-        """Resolve the walls of ``group`` together (:mod:`.impulses`); the walls that took
-        an impulse, or None when no active set is feasible (then one wall at a time)."""
+        """Resolve the walls of ``group`` together with the held walls (:mod:`.impulses`:
+        a held wall ``j`` takes an impulse only to keep ``u_j+ >= 0``, its target rate
+        change ``g_j = -u_j-``; its Newton direction is taken from its map at the first
+        approaching wall's direction, the map being linear); the walls of ``group`` that
+        took an impulse, or None when no active set is feasible (then one wall at a
+        time).  Held walls that end up leaving are released."""
         y = self.y
         q, v = self.q(y), self.v(y)
         walls = [w for w, _ in group]
@@ -498,20 +504,34 @@ class _Run:
             gw = self.f.rate_change(w, self.t, q, d)
             g.append(gw)
             x.append(d / gw)
-        K = [[self.f.rate_change(j, self.t, q, xi) for xi in x] for j in walls]
+        held = []
+        for j in self.mode:
+            probe = next((xi for xi in x if self.f.rate_change(j, self.t, q, xi) != 0), None)
+            if probe is None:
+                continue  # no approaching wall moves it: it needs no impulse
+            d = self.f.impact(j, self.t, q, probe) - probe
+            held.append(j)
+            x.append(d / self.f.rate_change(j, self.t, q, d))
+            g.append(-self.f.normal_rate(j, self.t, y))
+        K = [[self.f.rate_change(j, self.t, q, xi) for xi in x] for j in walls + held]
         m = active_set_solution(K, g, self.tol_v(y))
-        if m is None or all(mi == 0 for mi in m):
+        if m is None or all(mi == 0 for mi in m[: len(walls)]):
             return None
         v_plus = v.copy()
         for mi, xi in zip(m, x, strict=True):
             if mi != 0:
                 v_plus = v_plus + mi * xi
         y_plus = np.concatenate([q, v_plus])
-        struck = [w for w, mi in zip(walls, m, strict=True) if mi != 0]
+        if self.mode:
+            y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
+        struck = [w for w, mi in zip(walls, m[: len(walls)], strict=True) if mi != 0]
         rates = dict(group)
         for k, w in enumerate(struck):  # the energy change is carried by the first
             self.event("impact", w, y, y_plus, rates[w], count_energy=k == 0)
         self.y = y_plus
+        for j, mj in zip(held, m[len(walls) :], strict=True):
+            if mj == 0 and self.f.normal_rate(j, self.t, self.y) > self.tol_v(self.y):
+                self.release(j)
         return struck
 
     def band_touching(self) -> None:

@@ -1291,19 +1291,22 @@ static int approaching_walls(sim_t *s, int *walls, double *rates)
    1 done (struck[] the walls that took an impulse), 0 not applicable, -1 stopped */
 static int impact_together(sim_t *s, int *struck, int *nstruck)
 {
-    int walls[NW > 0 ? NW : 1], k;
+    int walls[NW > 0 ? NW : 1], k, nh = s->mode >= 0 ? mode_size[s->mode] : 0;
     double rates[NW > 0 ? NW : 1];
     *nstruck = 0;
-    if (s->sequential || s->mode >= 0) return 0;
+    if (s->sequential) return 0;
     k = approaching_walls(s, walls, rates);
     if (s->status != ST_RUNNING) return -1;
-    if (k < 2 || k > MAX_SIM) return 0;
+    if (k < 1 || k + nh < 2 || k + nh > MAX_SIM) return 0;
     for (int i = 0; i < k; ++i)
         if (!simultaneous[walls[i]]) return 0;
+    for (int j = 0; j < nh; ++j)
+        if (!simultaneous[mode_walls[s->mode][j]]) return 0;
     for (int i = 0; i < k; ++i)
         if (check_condition(s, walls[i])) return -1;
     const double *q = s->y, *v = s->y + NQ;
     double X[MAX_SIM][NQ], g[MAX_SIM], K[MAX_SIM * MAX_SIM], m[MAX_SIM], yp[NY];
+    int rows[MAX_SIM], held[MAX_SIM], n = k, nheld = 0;
     for (int i = 0; i < k; ++i) {
         double d[NQ];
         if (call_wall(s, F_IMPACT, walls[i], s->t, s->y, v, d) != 0) {
@@ -1313,24 +1316,48 @@ static int impact_together(sim_t *s, int *struck, int *nstruck)
         for (int j = 0; j < NQ; ++j) d[j] -= v[j];
         g[i] = rate_change(s, walls[i], q, d);
         for (int j = 0; j < NQ; ++j) X[i][j] = d[j] / g[i];
+        rows[i] = walls[i];
     }
-    for (int j = 0; j < k; ++j)
-        for (int i = 0; i < k; ++i) K[j * MAX_SIM + i] = rate_change(s, walls[j], q, X[i]);
+    /* the held walls: a direction from the wall's map at the first approaching wall's
+       direction that moves it (the map is linear); the target u+ >= 0 (hybrid._Run.impact_together) */
+    for (int h = 0; h < nh; ++h) {
+        int w = mode_walls[s->mode][h], probe = -1;
+        for (int i = 0; i < k && probe < 0; ++i)
+            if (rate_change(s, w, q, X[i]) != 0.0) probe = i;
+        if (probe < 0) continue;
+        double d[NQ];
+        if (call_wall(s, F_IMPACT, w, s->t, s->y, X[probe], d) != 0) {
+            fail_call(s, F_IMPACT);
+            return -1;
+        }
+        for (int j = 0; j < NQ; ++j) d[j] -= X[probe][j];
+        double gd = rate_change(s, w, q, d);
+        for (int j = 0; j < NQ; ++j) X[n][j] = d[j] / gd;
+        g[n] = -normal_rate(s, w, s->t, s->y);
+        rows[n++] = w;
+        held[nheld++] = w;
+    }
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) K[j * MAX_SIM + i] = rate_change(s, rows[j], q, X[i]);
     if (s->status != ST_RUNNING) return -1;
-    if (active_set_solution(k, K, g, tol_v(s, s->y), m) != 0) return 0;
+    if (active_set_solution(n, K, g, tol_v(s, s->y), m) != 0) return 0;
     int any = 0;
     for (int i = 0; i < k; ++i) any |= m[i] != 0.0;
     if (!any) return 0;
     memcpy(yp, s->y, sizeof yp);
-    for (int i = 0; i < k; ++i)
+    for (int i = 0; i < n; ++i)
         if (m[i] != 0.0)
             for (int j = 0; j < NQ; ++j) yp[NQ + j] = yp[NQ + j] + m[i] * X[i][j];
+    if (s->mode >= 0) project(s, s->mode, s->t, yp, yp + NQ, yp + NQ);
     for (int i = 0; i < k; ++i) {
         if (m[i] == 0.0) continue;
         if (event_counted(s, K_IMPACT, walls[i], s->y, yp, rates[i], *nstruck == 0)) return -1;
         struck[(*nstruck)++] = walls[i];
     }
     memcpy(s->y, yp, sizeof yp);
+    for (int h = 0; h < nheld; ++h) /* held walls left behind */
+        if (m[k + h] == 0.0 && normal_rate(s, held[h], s->t, s->y) > tol_v(s, s->y))
+            if (release_wall(s, held[h])) return -1;
     return 1;
 }
 
