@@ -23,6 +23,7 @@ from symmech.scenefile import builtin_scene_path, load_scene
 
 __all__ = [
     "EXAMPLES",
+    "ball_in_corner",
     "body_pendulum_rotor",
     "bouncing_ball",
     "bouncing_ellipse",
@@ -33,6 +34,8 @@ __all__ = [
     "disk_3_7_gravity",
     "ellipse_gravity",
     "example",
+    "falling_rod",
+    "ladder",
     "newtons_cradle",
     "pendulum_on_cart",
     "pendulum_wall",
@@ -145,6 +148,22 @@ def stiff_dumbbell() -> Scene:
     rest length L (k up to 1e8), falling under gravity g; the lower one bounces on the floor
     y1 = 0 with restitution alpha.  ``V = m g (y1 + y2) + k (y2 - y1 - L)^2 / 2``."""
     return _builtin("stiff_dumbbell")
+
+
+def falling_rod() -> Scene:
+    """A uniform rod falling on the floor, each end a wall (several contacts at once)."""
+    return _builtin("falling_rod")
+
+
+def ladder() -> Scene:
+    """A ladder sliding on a frictionless floor and wall; it leaves the wall at
+    sin(theta) = (2/3) sin(theta0)."""
+    return _builtin("ladder")
+
+
+def ball_in_corner() -> Scene:
+    """A ball dropped into a V corner of two frictionless planes."""
+    return _builtin("ball_in_corner")
 
 
 def pendulum_on_cart(n: int) -> Scene:
@@ -266,6 +285,9 @@ EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {
     "newtons_cradle_3": (lambda: newtons_cradle(3), "Newton's cradle of 3 balls on a line"),
     "pendulum_wall": (pendulum_wall, "pendulum swinging into a vertical wall"),
     "stiff_dumbbell": (stiff_dumbbell, "stiff spring dumbbell bouncing on the floor"),
+    "falling_rod": (falling_rod, "uniform rod falling on the floor, both ends walls"),
+    "ladder": (ladder, "ladder sliding on a frictionless floor and wall"),
+    "ball_in_corner": (ball_in_corner, "ball dropped into a V corner"),
 }
 
 
