@@ -646,7 +646,7 @@ def test_simulator_flags_do_not_change_the_bits():
     from symmech.simulate.c_run import run_c
     from symmech.simulate.csim import SIMULATOR_FLAGS, CLibrary, library
     from symmech.simulate.hybrid import Options
-    from symmech.simulate.system import check_parameters
+    from symmech.simulate.parameters import check_parameters
 
     assert "-O3" in SIMULATOR_FLAGS and "-O2" in DEFAULT_FLAGS
     scene = ellipse_gravity()

@@ -12,7 +12,8 @@ import math
 
 import numpy as np
 
-from symmech.simulate.system import SimulationError, real_scalar, real_values
+from symmech.simulate.parameters import real_scalar, real_values
+from symmech.simulate.system import SimulationError
 
 __all__ = [
     "MAX_COUNT",
@@ -52,7 +53,7 @@ def count(value: object, what: str, limit: int = MAX_COUNT) -> int:
 def states(value: object, n: int, what: str, *, rows: bool = False) -> np.ndarray:
     """``value`` as float64 of shape ``(n,)`` (or ``(N, n)`` with ``rows``, N >= 1), real
     by the rule of the generated code's arguments
-    (:func:`~symmech.simulate.system.real_values`) and finite; a copy in C order."""
+    (:func:`~symmech.simulate.parameters.real_values`) and finite; a copy in C order."""
     a = np.array(real_values(value, what), dtype=np.float64, order="C", copy=True)
     if rows:
         if a.ndim != 2 or a.shape[1] != n or a.shape[0] < 1:

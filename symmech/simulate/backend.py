@@ -30,11 +30,12 @@ import numpy as np
 
 from symmech.simulate.csim import C_METHODS
 from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
+from symmech.simulate.functions import Functions
 from symmech.simulate.hybrid import run
 from symmech.simulate.options import RunOptions
 from symmech.simulate.result import SimulationResult
 from symmech.simulate.steppers import METHODS as STEPPER_METHODS
-from symmech.simulate.system import Functions, HybridSystem, SimulationError
+from symmech.simulate.system import HybridSystem, SimulationError
 
 __all__ = ["BACKENDS", "Backend", "CBackend", "NumpyBackend", "ScipyBackend", "backend_named"]
 

@@ -42,11 +42,13 @@ from symmech.simulate.csim import (
     missing_mode,
     options_vector,
 )
+from symmech.simulate.functions import Functions
 from symmech.simulate.options import RunOptions
+from symmech.simulate.parameters import check_parameters
 from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
 from symmech.simulate.run import system_for
-from symmech.simulate.system import FREE, Functions, SimulationError, check_parameters
+from symmech.simulate.system import FREE, SimulationError
 
 __all__ = ["BatchResult", "simulate_batch"]
 

@@ -29,7 +29,8 @@ import numpy as np
 
 from symmech.simulate.arguments import MAX_EVENT_SAMPLES, count, positive
 from symmech.simulate.hybrid import MAX_STEPS, Options
-from symmech.simulate.system import SimulationError, real_scalar
+from symmech.simulate.parameters import real_scalar
+from symmech.simulate.system import SimulationError
 
 __all__ = ["CONTACT_MODES", "IMPACT_LAWS", "RunOptions"]
 

@@ -30,13 +30,13 @@ from symmech.declaration.symbols import t as TIME
 from symmech.scene import Scene
 from symmech.simulate.flow import AugmentedFlow, FlowFailure, FlowStats, Segment
 from symmech.simulate.hybrid import Options, run
+from symmech.simulate.parameters import check_parameters
 from symmech.simulate.precise import GaussLegendre
 from symmech.simulate.result import SimulationResult
 from symmech.simulate.system import (
     FREE,
     Mode,
     SimulationError,
-    check_parameters,
     contact_rows,
     contact_scene,
     simultaneous_walls,
@@ -50,7 +50,7 @@ def _mp_array(values: Any) -> np.ndarray:
 
 
 class MpFunctions:
-    """The :class:`~.system.Functions` interface over lambdified closed forms in mpmath."""
+    """The :class:`~.functions.Functions` interface over lambdified closed forms in mpmath."""
 
     def __init__(self, scene: Scene, params: Mapping[str, float]):
         self.scene = scene
@@ -138,7 +138,7 @@ class MpFunctions:
         return self.rate(wall, t, y, self.rhs(FREE, t, y))
 
     def rate_change(self, wall: int, t: Any, q: np.ndarray, dv: np.ndarray) -> Any:
-        """As :meth:`.system.Functions.rate_change`, in mpmath."""
+        """As :meth:`.functions.Functions.rate_change`, in mpmath."""
         qdot = self._eval(("qdot",), lambda: sp.Matrix(self.scene.kinematics()), t, q, dv)
         return mpmath.fdot(list(self.gradient(wall, t, q)), list(qdot))
 
@@ -178,7 +178,8 @@ class MpFunctions:
         return max(abs(x) for x in r)
 
     def impact_condition(self, wall: int, t: Any, q: np.ndarray) -> float:
-        """Not limited at 30+ digits: always 1 (see :meth:`.system.Functions.impact_condition`)."""
+        """Not limited at 30+ digits: always 1
+        (see :meth:`.functions.Functions.impact_condition`)."""
         return 1.0
 
     def normal_force(

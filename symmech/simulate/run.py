@@ -26,15 +26,11 @@ import sympy as sp
 from symmech.scene import Scene
 from symmech.simulate.arguments import states
 from symmech.simulate.backend import BACKENDS, backend_named
+from symmech.simulate.functions import Functions
 from symmech.simulate.options import CONTACT_MODES, RunOptions
+from symmech.simulate.parameters import check_parameters
 from symmech.simulate.result import SimulationResult
-from symmech.simulate.system import (
-    FREE,
-    Functions,
-    HybridSystem,
-    SimulationError,
-    check_parameters,
-)
+from symmech.simulate.system import FREE, HybridSystem, SimulationError
 
 __all__ = ["BACKENDS", "CONTACT_MODES", "simulate", "system_for"]
 

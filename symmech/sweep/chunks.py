@@ -3,7 +3,7 @@
 :func:`prepare` turns a chunk (its grid rows, runs ``lo:lo + len(rows)``) into a
 :class:`~symmech.sweep.worker.ChunkInput`, checking every run as
 :func:`symmech.simulate.simulate` checks one (in the same order, with the same messages):
-finite initial state, the parameters (:func:`~symmech.simulate.system.check_parameters`:
+finite initial state, the parameters (:func:`~symmech.simulate.parameters.check_parameters`:
 all given, finite, declared signs, restitutions in [0, 1]), ``psi >= 0`` at every wall
 (a gap below ``-10 atol`` is refused) and, for a constrained scene, ``v0`` in D (a residual
 within ``100 (atol + rtol |v0|)`` projected away with P by the same call ``simulate``
@@ -44,16 +44,12 @@ from symmech.simulate.csim import (
     info_entry,
     parameter_vector,
 )
+from symmech.simulate.functions import Functions
 from symmech.simulate.hybrid import Options
+from symmech.simulate.parameters import check_parameters
 from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
-from symmech.simulate.system import (
-    FREE,
-    Functions,
-    HybridSystem,
-    SimulationError,
-    check_parameters,
-)
+from symmech.simulate.system import FREE, HybridSystem, SimulationError
 from symmech.sweep.grid import Columns
 from symmech.sweep.worker import ChunkInput, LibrarySource, LoopOptions, run_chunk
 

@@ -38,10 +38,12 @@ from symmech.scene import Scene
 from symmech.simulate.arguments import count, states
 from symmech.simulate.backend import backend_named
 from symmech.simulate.csim import INFO_HEAD, library, options_vector
+from symmech.simulate.functions import Functions
 from symmech.simulate.hybrid import Options
 from symmech.simulate.options import RunOptions
+from symmech.simulate.parameters import real_number
 from symmech.simulate.run import system_for
-from symmech.simulate.system import Functions, SimulationError, real_number
+from symmech.simulate.system import SimulationError
 from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
 from symmech.sweep.grid import read_grid, resolve_columns
 from symmech.sweep.runner import Progress, run_dask, run_local

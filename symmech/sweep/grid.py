@@ -26,7 +26,8 @@ from typing import Any
 import numpy as np
 
 from symmech.scene import Scene
-from symmech.simulate.system import SimulationError, real_values
+from symmech.simulate.parameters import real_values
+from symmech.simulate.system import SimulationError
 
 __all__ = ["Columns", "product", "read_grid", "resolve_columns"]
 

@@ -218,7 +218,7 @@ static int call_residual(const sim_t *s, int mode, double t, const double *q, co
     }
 }
 
-/* ---- the evaluations of symmech.simulate.system.Functions ---- */
+/* ---- the evaluations of symmech.simulate.functions.Functions ---- */
 
 static int all_finite(int size, const double *x)
 {
@@ -769,7 +769,7 @@ static int needs_push(sim_t *s, int w, const double *y)
 }
 
 /* the 2-norm condition number of the impact's Gram matrix C = A g^-1 A^T, A = [mu; dpsi S]
-   (symmech.simulate.system.Functions.impact_condition): g^-1 A^T by Gaussian elimination
+   (symmech.simulate.functions.Functions.impact_condition): g^-1 A^T by Gaussian elimination
    with partial pivoting, the eigenvalues of the symmetric part of C by cyclic Jacobi
    rotations; 1 for an unconstrained scene */
 static double impact_condition(sim_t *s, int w, const double *q)
@@ -1183,7 +1183,7 @@ static int impact_alone(sim_t *s, int w, double r)
 }
 
 /* dpsi S dv: the change of wall w's normal rate for a velocity change dv
-   (symmech.simulate.system.Functions.rate_change) */
+   (symmech.simulate.functions.Functions.rate_change) */
 static double rate_change(sim_t *s, int w, const double *q, const double *dv)
 {
     double g[NQ], qdot[NQ], acc = 0.0;

@@ -1,0 +1,229 @@
+"""The evaluations the hybrid loop makes, over a compiled :class:`~.system.HybridSystem` at
+fixed parameters, in float64 (:class:`symmech.simulate.reference.MpFunctions` is the same
+interface in mpmath)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from symmech.codegen.module import NumericalError, SceneModule
+from symmech.declaration.symbols import t as TIME
+from symmech.simulate.system import (
+    FREE,
+    HybridSystem,
+    Mode,
+    SimulationError,
+    simultaneous_walls,
+)
+
+__all__ = ["Functions"]
+
+
+class Functions:
+    """The evaluations the hybrid loop makes, over a :class:`HybridSystem` at fixed
+    parameters, in float64.  ``mode`` is a :data:`Mode`: ``()`` (free flight) or the sorted
+    indices of the walls held.  Every method takes and returns NumPy arrays of float64
+    (scalars as floats).
+    (:class:`symmech.simulate.reference.MpFunctions` is the same interface in mpmath.)"""
+
+    #: The arithmetic's unit roundoff, and its array constructor.
+    eps = float(np.finfo(float).eps)
+
+    @staticmethod
+    def array(y: Any) -> np.ndarray:
+        return np.array(y, dtype=float)
+
+    def __init__(self, system: HybridSystem, params: Mapping[str, float]):
+        self.system = system
+        self.n = system.n
+        self.walls = len(system.scene.walls)
+        self.constrained = system.scene.is_constrained
+        self.moving = system.moving
+        self.wall_names = tuple(w.name for w in system.scene.walls)
+        #: The flow conserves T + V: the potential does not depend on t (ideal constraints
+        #: and contact constraints do no work).
+        self.energy_conserved = system.energy_conserved
+        self._params = dict(params)
+        for w in system.scene.walls:
+            if (
+                w.velocity is not None
+                and TIME not in w.psi.free_symbols
+                and w.impulsive_matrix.rows
+                and any(e != 0 for e in w.velocity)
+            ):
+                raise SimulationError(
+                    f"wall {w.name!r} is static but has a declared velocity (a conveyor) and"
+                    " impulsive constraints: its contact mode would hold nu (v - W) = 0, which"
+                    " the simulator does not support; its impact map and generated code do"
+                )
+        free = system.free
+        if free.inputs:
+            raise SimulationError(
+                f"scene {system.scene.name!r} has arbitrary functions of time {list(free.inputs)}:"
+                " give their expressions with definitions={f: expression} (command line:"
+                " --define f=EXPR)"
+            )
+        #: Per wall: its impact has a Newton direction (law "newton", no impulsive
+        #: constraints), so it can be resolved with others at once (:mod:`.impulses`).
+        self.simultaneous = simultaneous_walls(system.scene)
+        #: The mode the flow integrates (``()``: free flight; the walls held).
+        self.mode: Mode = FREE
+        self._p: dict[Mode, np.ndarray | None] = {}
+        self._takes_t: dict[tuple[Mode, str], bool] = {}
+
+    # -- plumbing -------------------------------------------------------------------------
+    def _module(self, mode: Mode) -> SceneModule | None:
+        return self.system.contact(mode) if mode else self.system.free
+
+    def _pvec(self, mode: Mode) -> np.ndarray | None:
+        if mode not in self._p:
+            mod = self._module(mode)
+            assert mod is not None
+            names = mod.parameters
+            self._p[mode] = (
+                np.array([self._params[k] for k in names], dtype=np.float64) if names else None
+            )
+            for f in mod.code.functions:
+                self._takes_t[(mode, f.name)] = f.takes_time
+        return self._p[mode]
+
+    def locked(self, mode: Mode) -> bool:
+        """Whether ``mode`` is a contact that leaves no motion (the body rests)."""
+        return bool(mode) and self.system.contact(mode) is None
+
+    def _call(self, mode: Mode, name: str, t: float, *state: np.ndarray) -> np.ndarray:
+        p = self._pvec(mode)
+        mod = self._module(mode)
+        assert mod is not None
+        tt = t if self._takes_t.get((mode, name), False) else None
+        return mod.call(name, *state, params=p, t=tt)
+
+    def _wall_name(self, kind: str, wall: int) -> str:
+        return self.system.free._wall_function(kind, wall)
+
+    # -- the evaluations --------------------------------------------------------------------
+    def rhs(self, mode: Mode, t: float, y: np.ndarray) -> np.ndarray:
+        """y_dot = (q_dot, v_dot) in free flight (mode ``()``) or in contact."""
+        if self.locked(mode):
+            return np.zeros_like(y)
+        try:
+            return self._call(mode, "rhs", t, y)
+        except NumericalError:
+            # a trial stage far outside the solution: NaN makes the integrator reject it
+            return np.full_like(y, np.nan)
+
+    def flow_rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """y_dot in the current :attr:`mode` (the flow's right-hand side)."""
+        return self.rhs(self.mode, t, y)
+
+    def flow_rates(self, t: float, y: np.ndarray, ydot: np.ndarray) -> np.ndarray:
+        """d psi_w/dt of every wall along the flow (for :class:`~.flow.AugmentedFlow`); NaN
+        where a generated call fails at a trial stage (the integrator then rejects it)."""
+        try:
+            return np.array([self.rate(w, t, y, ydot) for w in range(self.walls)])
+        except NumericalError:
+            return np.full(self.walls, np.nan)
+
+    def gaps(self, t: float, y: np.ndarray) -> np.ndarray:
+        """psi_w(t, q) of every wall."""
+        return np.array([self.psi(w, t, y[: self.n]) for w in range(self.walls)])
+
+    def jac(self, mode: Mode, t: float, y: np.ndarray) -> np.ndarray:
+        """d(y_dot)/dy in the mode (the generated Jacobian; zero in a locked contact)."""
+        if self.locked(mode):
+            return np.zeros((len(y), len(y)))
+        return self._call(mode, "jacobian", t, y)
+
+    def flow_jac(self, t: float, y: np.ndarray) -> np.ndarray:
+        """d(y_dot)/dy in the current :attr:`mode`."""
+        return self.jac(self.mode, t, y)
+
+    def psi(self, wall: int, t: float, q: np.ndarray) -> float:
+        """The gap of ``wall`` at (t, q)."""
+        return float(self._call(FREE, self._wall_name("psi", wall), t, q))
+
+    def rate(self, wall: int, t: float, y: np.ndarray, ydot: np.ndarray) -> float:
+        """d psi/dt = dpsi(q) q_dot + psi_t along the flow (q_dot from ``ydot``)."""
+        n = self.n
+        q = y[:n]
+        g = self._call(FREE, self._wall_name("dpsi", wall), t, q)
+        r = float(np.dot(g, ydot[:n]))
+        if self.moving[wall]:
+            r += float(self._call(FREE, self._wall_name("psi_t", wall), t, q))
+        return r
+
+    def normal_rate(self, wall: int, t: float, y: np.ndarray) -> float:
+        """d psi/dt at a state (q_dot from the kinematics of the free flow)."""
+        return self.rate(wall, t, y, self.rhs(FREE, t, y))
+
+    def rate_change(self, wall: int, t: float, q: np.ndarray, dv: np.ndarray) -> float:
+        """``dpsi S dv``: the change of the wall's normal rate for a velocity change
+        ``dv`` (``S dv`` the q-part of the free flow at velocity ``dv``: the kinematics)."""
+        if self.system.scene.frame is None:
+            qdot = dv
+        else:
+            qdot = self.rhs(FREE, t, np.concatenate([q, dv]))[: self.n]
+        return float(np.dot(self.gradient(wall, t, q), qdot))
+
+    def gradient(self, wall: int, t: float, q: np.ndarray) -> np.ndarray:
+        """d psi/d q of ``wall`` (coordinates)."""
+        return self._call(FREE, self._wall_name("dpsi", wall), t, q)
+
+    def impact(self, wall: int, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """v+ of the scene's closed-form (or KKT) impact map at ``wall``."""
+        return self._call(FREE, self._wall_name("impact", wall), t, q, v)
+
+    def energy(self, t: float, q: np.ndarray, v: np.ndarray) -> float:
+        """T + V."""
+        return float(self._call(FREE, "energy", t, q, v))
+
+    def project(self, mode: Mode, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """P(q) v: v projected g-orthogonally onto the mode's distribution."""
+        if not mode and not self.constrained:
+            return v
+        if self.locked(mode):
+            return np.zeros_like(v)
+        P = self._call(mode, "projector_P", t, q)
+        return P @ v
+
+    def residual(self, mode: Mode, t: float, q: np.ndarray, v: np.ndarray) -> float:
+        """max |mu v| of the mode's constraints (0 for an unconstrained free flight)."""
+        if not mode and not self.constrained:
+            return 0.0
+        if self.locked(mode):
+            return float(np.max(np.abs(v), initial=0.0))
+        return float(np.max(np.abs(self._call(mode, "constraint_residual", t, q, v))))
+
+    def impact_condition(self, wall: int, t: float, q: np.ndarray) -> float:
+        """The 2-norm condition number of the impact's Gram matrix ``C = A g^-1 A^T`` with
+        ``A = [mu; dpsi S]`` (Carnot paper section 3: the wall's one-form with the permanent
+        constraints), 1 for an unconstrained scene.  It bounds the relative error of the
+        impulse: a wall nearly in the constraint span makes C nearly singular."""
+        if not self.constrained:
+            return 1.0
+        n = self.n
+        eye = np.eye(n)
+        g = self._call(FREE, "mass_matrix", t, q)
+        mu = np.column_stack([self._call(FREE, "constraint_residual", t, q, e) for e in eye])
+        row = self.gradient(wall, t, q)
+        if self.system.scene.frame is not None:
+            S = np.column_stack([self.rhs(FREE, t, np.concatenate([q, e]))[:n] for e in eye])
+            row = row @ S
+        A = np.vstack([mu, row])
+        C = A @ np.linalg.solve(g, A.T)
+        return float(np.linalg.cond(C))
+
+    def normal_force(
+        self, wall: int, t: float, q: np.ndarray, v: np.ndarray, mode: Mode | None = None
+    ) -> float:
+        """lambda_N of ``wall`` in the contact mode ``mode`` (default: the wall alone) at
+        (q, v): positive while the wall pushes."""
+        mode = (wall,) if mode is None else mode
+        if self.locked(mode):
+            p = [self._params[str(s)] for s in self.system.scene.parameters]
+            return float(self.system.locked_force(mode)(t, q, p)[mode.index(wall)])
+        lam = self._call(mode, "multipliers", t, q, v)
+        return float(lam[self.system.normal_index(mode, wall)])
