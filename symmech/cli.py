@@ -23,8 +23,10 @@ Commands:
 ``symmech export [SCENE] [-o FILE]``
     Write a scene as a TOML scene file (to start a new scene from a built-in one).
 
-``symmech simulate SCENE``, ``symmech bench CASE``, ``symmech stress``
-    Simulate a scene, print its error against run time, run the stiff and extreme cases
+``symmech simulate SCENE``
+    Simulate a scene (:mod:`symmech.bench.simulate_command`).
+``symmech bench CASE``, ``symmech stress``
+    Print a case's error against run time, run the stiff and extreme cases
     (:mod:`symmech.bench.commands`).
 ``symmech sweep SCENE --grid FILE --out FILE``
     Run the scene for every row of a grid (:mod:`symmech.sweep.command`).
@@ -58,6 +60,8 @@ from typing import NoReturn
 import sympy as sp
 
 from symmech.bench.commands import COMMANDS, add_commands, run_command
+from symmech.bench.simulate_command import add_command as add_simulate_command
+from symmech.bench.simulate_command import run_command as run_simulate_command
 from symmech.codegen.escape import file_name, terminal
 from symmech.codegen.output_files import write_text_atomic
 from symmech.derivation import MAX_DETAILED_N, Derivation, derivation
@@ -255,6 +259,7 @@ def _parser() -> argparse.ArgumentParser:
     verify = sub.add_parser("verify", parents=[common], help="run the textbook checks")
     verify.add_argument("-k", dest="pattern", help="only checks whose name contains TEXT")
 
+    add_simulate_command(sub, common)
     add_commands(sub, common)
     add_sweep_command(sub, common)
 
@@ -285,6 +290,8 @@ def _run(args: argparse.Namespace, progress: _Progress) -> int:
         return EXIT_OK
     if command == "verify":
         return EXIT_FAILED if run_checks(args.pattern, progress) else EXIT_OK
+    if command == "simulate":
+        return run_simulate_command(args, resolve_scene, progress)
     if command in COMMANDS:
         return run_command(args, resolve_scene, progress)
     if command == "sweep":

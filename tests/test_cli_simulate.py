@@ -195,3 +195,20 @@ def test_simulate_defines_a_run_time_input(tmp_path: Path):
     assert missing.returncode != 0 and "--define f=EXPR" in missing.stderr
     hostile = symmech(*args, "--define", "tau=__import__('os')", "--quiet", cwd=tmp_path)
     assert hostile.returncode != 0 and "is not allowed" in hostile.stderr
+
+
+def test_simulate_chooses_the_impact_law(tmp_path: Path):
+    """The rod dropped flat: both ends together by default (no spin, the final state of a
+    rod lying flat), one at a time with --impact-law sequential (it spins)."""
+    common = ("simulate", "falling_rod", "--q0", "0,1,0", "--v0", "0,0,0", "--quiet")
+    flat = symmech(*common, "--t-end", "3", cwd=tmp_path)
+    assert flat.returncode == 0, flat.stderr
+    assert "status: finished" in flat.stdout
+    (v_final,) = re.findall(r"^v = \[(.*)\]$", flat.stdout, re.M)
+    assert all(abs(float(x)) < 1e-9 for x in v_final.split())
+    spun = symmech(*common, "--t-end", "0.46", "--impact-law", "sequential", cwd=tmp_path)
+    assert spun.returncode == 0, spun.stderr
+    (v_spun,) = re.findall(r"^v = \[(.*)\]$", spun.stdout, re.M)
+    assert abs(float(v_spun.split()[2])) > 0.1
+    bad = symmech(*common, "--t-end", "1", "--impact-law", "random", cwd=tmp_path)
+    assert bad.returncode != 0 and "invalid choice" in bad.stderr

@@ -1,0 +1,132 @@
+"""The ``symmech simulate`` command.
+
+``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...]
+[--define NAME=EXPR ...] [--impact-law LAW]``
+    Run the scene (a built-in name or a scene file) with :func:`symmech.simulate` and print
+    its status, statistics, events and final state.  A built-in scene with a simulation
+    case (:mod:`symmech.bench.cases`) needs no state; otherwise ``--q0``, ``--v0`` and
+    ``--t-end`` are required.  Parameters default to the scene file's values.  ``--define``
+    gives a function of time of the scene (a run-time input, a moving wall's position) an
+    expression in t and the parameters for the run (parsed safely: ``definitions=``).  The
+    run options are those of :class:`symmech.simulate.options.RunOptions`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from symmech.bench.cases import CASES
+from symmech.bench.commands import print_line
+from symmech.errors import SymmechError
+from symmech.simulate.arguments import numbers
+from symmech.simulate.hybrid import MAX_STEPS
+from symmech.simulate.options import CONTACT_MODES, IMPACT_LAWS
+
+__all__ = ["add_command", "run_command"]
+
+_print = print_line
+
+
+def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
+    """Register ``simulate`` on the ``symmech`` sub-parsers."""
+    sim = sub.add_parser("simulate", parents=[common], help="simulate a scene with walls")
+    sim.add_argument("scene", help="scene file or built-in name")
+    sim.add_argument("--q0", help="initial coordinates, comma separated")
+    sim.add_argument("--v0", help="initial velocities, comma separated")
+    sim.add_argument("--t-end", type=float, help="final time")
+    sim.add_argument(
+        "--param", action="append", default=[], metavar="NAME=VALUE", help="a parameter value"
+    )
+    sim.add_argument(
+        "--define",
+        action="append",
+        default=[],
+        metavar="NAME=EXPR",
+        help="an expression in t and the parameters for a function of time (an input)",
+    )
+    sim.add_argument("--backend", default="c", choices=("c", "numpy", "scipy"))
+    sim.add_argument("--method", default="dop853")
+    sim.add_argument("--rtol", type=float, default=1e-8)
+    sim.add_argument("--atol", type=float, default=1e-10)
+    sim.add_argument("--contact", default="persistent", choices=CONTACT_MODES)
+    sim.add_argument("--max-events", type=int, default=100_000)
+    sim.add_argument("--max-steps", type=int, default=MAX_STEPS, help="steps of the run")
+    sim.add_argument("--events", type=int, default=20, help="events to print (default 20)")
+
+    sim.add_argument(
+        "--impact-law",
+        default="simultaneous",
+        choices=IMPACT_LAWS,
+        help="walls struck at one instant: together (default) or one at a time",
+    )
+
+
+def run_command(args: argparse.Namespace, load: Callable[[str], Any], say: Callable) -> int:
+    """Run ``symmech simulate`` (see the module docstring); ``load`` reads a scene file or
+    built-in name into a :class:`~symmech.scenefile.SceneFile`, ``say`` reports progress."""
+    return _simulate(args, load, say)
+
+
+def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callable) -> int:
+    import symmech.simulate as simulate_pkg
+
+    sf = load(args.scene)
+    scene = sf.scene
+    params = {str(k): float(v) for k, v in sf.defaults.items()}
+    case = CASES.get(scene.name)
+    q0 = numbers(args.q0, "--q0") if args.q0 else (list(case.q0) if case else None)
+    v0 = numbers(args.v0, "--v0") if args.v0 else (list(case.v0) if case else None)
+    t_end = args.t_end if args.t_end is not None else (case.t_end if case else None)
+    if q0 is None or v0 is None or t_end is None:
+        raise SymmechError(
+            f"scene {scene.name!r} has no built-in simulation case: give --q0, --v0 and --t-end"
+        )
+    if case is not None:
+        params.update(case.overrides)
+    for item in args.param:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise SymmechError(f"--param: expected NAME=VALUE, got {item!r}")
+        params[name.strip()] = numbers(value, f"--param {name}")[0]
+    definitions: dict[str, str] = {}
+    for item in args.define:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip():
+            raise SymmechError(f"--define: expected NAME=EXPR, got {item!r}")
+        definitions[name.strip()] = text
+    say(f"simulating {scene.name} to t = {t_end} ({args.backend}, {args.method})")
+    res = simulate_pkg.simulate(
+        scene,
+        q0,
+        v0,
+        t_end,
+        params=params,
+        backend=args.backend,
+        method=args.method,
+        rtol=args.rtol,
+        atol=args.atol,
+        contact=args.contact,
+        max_events=args.max_events,
+        max_steps=args.max_steps,
+        impact_law=args.impact_law,
+        definitions=definitions or None,
+    )
+    _print(f"status: {res.status}: {res.message}")
+    if res.accumulation_time is not None:
+        _print(f"accumulation time: {float(res.accumulation_time)!r}")
+    for key, value in res.stats.items():
+        _print(f"{key}: {value}")
+    _print(f"events: {len(res.events)}")
+    for e in res.events[: args.events]:
+        _print(f"  {e!r}")
+    if len(res.events) > args.events:
+        _print(f"  ... {len(res.events) - args.events} more")
+    with np.printoptions(precision=17):
+        _print(f"t = {float(res.t[-1])!r}")
+        _print(f"q = {np.asarray(res.q[-1], dtype=float)}")
+        _print(f"v = {np.asarray(res.v[-1], dtype=float)}")
+    return 0 if res.success else 1
