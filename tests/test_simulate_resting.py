@@ -116,9 +116,10 @@ def test_a_locked_rest_on_more_walls_than_coordinates_is_refused_with_a_reason()
         [y], metric=[[m]], potential=m * g * y,
         walls=[sm.Wall(y, restitution=0, name="a"), sm.Wall(2 * y, restitution=0, name="b")],
     )  # fmt: skip
-    res = sm.simulate(scene, [0.0], [0.0], 1.0, params={"m": 1.0, "g": G}, backend="numpy")
-    assert res.status == "failed"
-    assert "statically indeterminate" in res.message
+    for backend in ("c", "numpy"):
+        res = sm.simulate(scene, [0.0], [0.0], 1.0, params={"m": 1.0, "g": G}, backend=backend)
+        assert res.status == "failed"
+        assert "statically indeterminate" in res.message, (backend, res.message)
 
 
 def test_c_builds_the_contact_modes_a_run_reaches_and_batches_agree_with_single_runs():

@@ -208,6 +208,8 @@ class HybridSystem:
                 f"contact with {len(mode)} walls at once {names}: the C loop holds at most"
                 f" {MAX_SIMULTANEOUS} (backend='numpy' has no such limit)"
             )
+        if self.contact(mode) is None:
+            self.locked_force_expression(mode)  # refuses a statically indeterminate rest
         self._extra_modes.append(mode)
 
     def contact(self, mode: Mode) -> SceneModule | None:
