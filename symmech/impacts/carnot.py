@@ -68,7 +68,7 @@ from symmech.algebra.zero import is_zero
 from symmech.declaration.latex import latex_text
 from symmech.impacts.impact_projectors import ImpactProjectors
 
-__all__ = ["CarnotResult", "carnot_residual", "decide_identity"]
+__all__ = ["CarnotResult", "SparseEvaluation", "carnot_residual", "decide_identity"]
 
 Formed = tuple[sp.Expr, dict[str, sp.Expr], sp.ImmutableMatrix]
 
@@ -277,6 +277,37 @@ def _bounded(symbolic: Callable[[], Formed]) -> Formed | None:
         return None
 
 
+class SparseEvaluation:
+    """Matrix-vector arithmetic over the values ``value(entry)`` of sympy matrices, with
+    structurally zero entries skipped (the residual evaluations that
+    :func:`~symmech.algebra.identity.identically_zero` runs in exact or interval
+    arithmetic); ``const`` makes a constant of that arithmetic."""
+
+    def __init__(self, value: Callable[[sp.Expr], Any], const: Callable[[Any], Any]):
+        self.value, self.const = value, const
+
+    def matrix(self, M: sp.MatrixBase) -> list[list[Any]]:
+        return [[None if e == 0 else self.value(e) for e in M.row(i)] for i in range(M.rows)]
+
+    def dot(self, x: list[Any], y: list[Any]) -> Any:
+        acc = self.const(0)
+        for xi, yi in zip(x, y, strict=True):
+            if xi is not None:
+                acc = acc + xi * yi
+        return acc
+
+    def apply(self, M: list[list[Any]], x: list[Any]) -> list[Any]:
+        return [self.dot(row, x) for row in M]
+
+    @staticmethod
+    def add(x: list[Any], y: list[Any]) -> list[Any]:
+        return [xi + yi for xi, yi in zip(x, y, strict=True)]
+
+    @staticmethod
+    def sub(x: list[Any], y: list[Any]) -> list[Any]:
+        return [xi - yi for xi, yi in zip(x, y, strict=True)]
+
+
 class _Setup:
     """The data of one Carnot check, with the residual built two ways: symbolically in the
     fraction field (:func:`_symbolic`) and over any scalar arithmetic (:meth:`evaluate`,
@@ -292,27 +323,8 @@ class _Setup:
         the entries (structurally zero entries are skipped)."""
         p = self.proj
 
-        def mat(M: sp.MatrixBase) -> list[list[Any]]:
-            return [
-                [None if M[i, j] == 0 else value(M[i, j]) for j in range(M.cols)]
-                for i in range(M.rows)
-            ]
-
-        def dot(x: list[Any], y: list[Any]) -> Any:
-            acc = const(0)
-            for xi, yi in zip(x, y, strict=True):
-                if xi is not None:
-                    acc = acc + xi * yi
-            return acc
-
-        def apply(M: list[list[Any]], x: list[Any]) -> list[Any]:
-            return [dot(row, x) for row in M]
-
-        def add(x: list[Any], y: list[Any]) -> list[Any]:
-            return [xi + yi for xi, yi in zip(x, y, strict=True)]
-
-        def sub(x: list[Any], y: list[Any]) -> list[Any]:
-            return [xi - yi for xi, yi in zip(x, y, strict=True)]
+        ev = SparseEvaluation(value, const)
+        mat, dot, apply, add, sub = ev.matrix, ev.dot, ev.apply, ev.add, ev.sub
 
         g = mat(p.g)
 

@@ -65,7 +65,7 @@ from symmech.algebra.stability import stable_matrix
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import ImpactError
 from symmech.impacts.adjugate_projectors import shared_denominators
-from symmech.impacts.carnot import CarnotResult, _size, decide_identity
+from symmech.impacts.carnot import CarnotResult, SparseEvaluation, _size, decide_identity
 from symmech.impacts.degeneracy import Singularity, singular_set
 from symmech.impacts.impact_map import _resolve, given_wall_velocity, wall_one_form
 from symmech.impacts.impact_projectors import ImpactProjectors, impact_projectors
@@ -300,22 +300,8 @@ def _evaluate(m: SeveralImpactMap, value: Callable[[sp.Expr], Any], const: Calla
     :func:`~symmech.algebra.identity.identically_zero`)."""
     p = m.projectors
 
-    def mat(M: sp.MatrixBase) -> list[list[Any]]:
-        return [[None if e == 0 else value(e) for e in M.row(i)] for i in range(M.rows)]
-
-    def dot(x: list[Any], y: list[Any]) -> Any:
-        acc = const(0)
-        for xi, yi in zip(x, y, strict=True):
-            if xi is not None:
-                acc = acc + xi * yi
-        return acc
-
-    def apply(M: list[list[Any]], x: list[Any]) -> list[Any]:
-        return [dot(row, x) for row in M]
-
-    def sub(x: list[Any], y: list[Any]) -> list[Any]:
-        return [a - b for a, b in zip(x, y, strict=True)]
-
+    ev = SparseEvaluation(value, const)
+    mat, dot, apply, sub = ev.matrix, ev.dot, ev.apply, ev.sub
     g, W = mat(p.g), [value(e) for e in m.W]
     x = apply(mat(p.P), [value(s) for s in m.velocities])
     post = [a + value(b) for a, b in zip(apply(mat(m.matrix), x), m.offset, strict=True)]
