@@ -216,8 +216,11 @@ def _loop_impact(n, k, m, diag, M, A, alpha, psi_t, v):
     r[m][0] = (1.0 + alpha) * (r[m][0] - psi_t)
     for a in range(m + 1, k):
         r[a][0] += -psi_t * G[a][m] / G[m][m]
-    LG = _loop_cholesky(k, G)
-    _loop_cholesky_solve(k, LG, r)
+    if k == 1:  # one row: one division
+        r[0][0] = r[0][0] / G[0][0]
+    else:
+        LG = _loop_cholesky(k, G)
+        _loop_cholesky_solve(k, LG, r)
     out = []
     for i in range(n):
         s = v[i]
@@ -396,6 +399,9 @@ def test_step_flop_counts_by_hand_and_in_the_headers():
     assert step_flops("spd_solve", (2, 1)) == 2
     assert _dense("spd_solve", (2, 1), {"M": (2, 2), "f": (2,)}).flops == 2
     assert step_flops("spd_solve", (1, 0)) == 2 + 2
+    # impact with one row (n = 1, diagonal): M^-1 A^T (1), A v (2), G = A Y (2), the
+    # wall's right-hand side (3), r / G (1: one division, no Cholesky), v + Y lambda (2)
+    assert step_flops("impact_kkt", (1, 1, 0, 1)) == 1 + 2 + 2 + 3 + 1 + 2
     # leading orders: n^3 / 3 for the factorisation, 2 n^2 for the two solves
     n = 60
     assert step_flops("spd_solve", (n, 0)) / (n**3 / 3 + 2 * n**2) == pytest.approx(1, rel=0.05)

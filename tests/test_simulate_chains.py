@@ -116,3 +116,19 @@ def test_a_banded_contact_still_becomes_an_impact_when_the_balls_close_in():
         assert [e.kind for e in res.events] == ["impact", "impact"]
         x = res.q[-1]
         assert np.all(np.diff(x) >= 2 * PARAMS["r"] - 1e-8), x
+
+
+@pytest.mark.parametrize("m", [1.0, 2.0, 3.0, 0.7])
+def test_an_impact_leaves_no_residue_where_the_exact_answer_is_zero(m):
+    """Equal balls exchange their speeds exactly: the one-row impulse is r / G, one
+    division (it was (r / sqrt(G)) / sqrt(G), which left 2e-16 on the ball that stops)."""
+    scene = newtons_cradle(5)
+    for backend in ("c", "numpy"):
+        res = sm.simulate(
+            scene, 0.2 * np.arange(5), [1.0, 0, 0, 0, 0], 0.5, params={"m": m, "r": 0.1},
+            backend=backend,
+        )  # fmt: skip
+        for k, e in enumerate(res.impacts()):
+            want = np.zeros(5)
+            want[k + 1] = 1.0
+            np.testing.assert_array_equal(e.v_plus, want)

@@ -183,8 +183,8 @@ def step_flops(step: str | None, args: tuple[int, ...]) -> int:
     Cholesky factorisation of C and one solve (2 m^2), and for the acceleration
     ``X_f + X_mu lambda`` (2 n m).  ``impact_kkt`` (n, k, m, diag): factor, a solve with
     k columns, ``A v`` (2 n k), ``G = A Y`` (2 n k^2), the right-hand side (3 per row
-    from row m on), the Cholesky factorisation of G and one solve (2 k^2), and
-    ``v + Y lambda`` (2 n k).
+    from row m on), the Cholesky factorisation of G and one solve (2 k^2; for k = 1 one
+    division), and ``v + Y lambda`` (2 n k).
     """
     if step is None:
         return 0
@@ -199,7 +199,8 @@ def step_flops(step: str | None, args: tuple[int, ...]) -> int:
     if step == "impact_kkt":
         n, k, m, diag = args
         out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, k)
-        out += 2 * n * k + 2 * n * k * k + 3 * (k - m) + _cholesky_flops(k) + 2 * k * k
+        out += 2 * n * k + 2 * n * k * k + 3 * (k - m)
+        out += 1 if k == 1 else _cholesky_flops(k) + 2 * k * k  # one row: r / G
         return out + 2 * n * k
     raise CodegenError(f"unknown linear-algebra step {step!r}")
 

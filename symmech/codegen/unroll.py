@@ -375,7 +375,8 @@ def _impact_kkt(
     nu_w: Sequence[Value] | None = None,
 ) -> None:
     """sm_impact_kkt: Y = M^-1 A^T, G = A Y, r = b - A v, v+ = v + Y G^-1 r (Carnot
-    paper eqs. 6, 15, 20, by the Schur complement).  ``nu_w``: the values ``nu W`` of a
+    paper eqs. 6, 15, 20, by the Schur complement; G^-1 r by Cholesky, or for one row by
+    one division).  ``nu_w``: the values ``nu W`` of a
     declared wall velocity W; None for the default W (normal in the metric), whose
     ``nu W = -psi_t G[a, m] / G[m, m]``."""
     F = _factor(prog, n, diag, M)
@@ -395,8 +396,14 @@ def _impact_kkt(
             r[a][0] = prog.let(f"r{a}", add(r[a][0], nu_w[a - m - 1]))
         else:  # nu W = -psi_t G[a, m] / G[m, m]
             r[a][0] = prog.let(f"r{a}", add(r[a][0], div(mul(neg(psi_t), G[a, m]), G[m, m])))
-    FG = _cholesky(prog, k, lambda i, j: G[i, j], "Lg", "the Gram matrix G = A M^-1 A^T")
-    _cholesky_solve(prog, FG, r, "r")
+    if k == 1:
+        # one row: r / G, not (r / sqrt(G)) / sqrt(G), which rounds twice and leaves
+        # residues where the exact answer is 0 (equal balls exchanging their speeds)
+        prog.positive(G[0, 0], "the Gram matrix G = A M^-1 A^T")
+        r[0][0] = prog.let("r0_0", div(r[0][0], G[0, 0]))
+    else:
+        FG = _cholesky(prog, k, lambda i, j: G[i, j], "Lg", "the Gram matrix G = A M^-1 A^T")
+        _cholesky_solve(prog, FG, r, "r")
     for i in range(n):
         s = v[i]
         for a in range(k):
