@@ -22,13 +22,24 @@ import numpy as np
 from symmech.bench.cases import CASES
 from symmech.bench.commands import print_line
 from symmech.errors import SymmechError
-from symmech.simulate.arguments import numbers
+from symmech.simulate.arguments import numbers, parameter_values
 from symmech.simulate.hybrid import MAX_STEPS
 from symmech.simulate.options import CONTACT_MODES, IMPACT_LAWS
 
 __all__ = ["add_command", "run_command"]
 
 _print = print_line
+
+
+def _count(text: str) -> int:
+    """A non-negative whole number for argparse (a negative one is refused, exit 2)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {value}")
+    return value
 
 
 def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
@@ -55,7 +66,9 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
     sim.add_argument("--contact", default="persistent", choices=CONTACT_MODES)
     sim.add_argument("--max-events", type=int, default=100_000)
     sim.add_argument("--max-steps", type=int, default=MAX_STEPS, help="steps of the run")
-    sim.add_argument("--events", type=int, default=20, help="events to print (default 20)")
+    sim.add_argument(
+        "--events", type=_count, default=20, help="events to print (default 20; 0: none)"
+    )
 
     sim.add_argument(
         "--impact-law",
@@ -87,11 +100,7 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         )
     if case is not None:
         params.update(case.overrides)
-    for item in args.param:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise SymmechError(f"--param: expected NAME=VALUE, got {item!r}")
-        params[name.strip()] = numbers(value, f"--param {name}")[0]
+    params.update(parameter_values(args.param))
     definitions: dict[str, str] = {}
     for item in args.define:
         name, sep, text = item.partition("=")

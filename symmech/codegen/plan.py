@@ -240,6 +240,11 @@ def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Exp
     expression, a number, or text parsed safely
     (:func:`symmech.declaration.expressions.to_expression`, never evaluated) in ``t`` and
     the scene's parameters."""
+    if not isinstance(definitions, Mapping):
+        raise CodegenError(
+            "definitions: expected a mapping {function of t: expression in t and the"
+            f" parameters}}, got {type(definitions).__name__}"
+        )
     if not definitions:
         return {}
     names = {"t": TIME, **{str(p): p for p in scene.parameters}}
@@ -271,6 +276,14 @@ def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Exp
             e = to_expression(value, names, field=f"definitions[{name!r}]")
         except SymmechError as exc:
             raise CodegenError(str(exc)) from None
+        # a definition is a function of t and the parameters only, whatever its type
+        stray = sorted(str(x) for x in e.free_symbols if x not in set(names.values()))
+        stray += sorted({str(a) for a in atoms(e, (AppliedUndef,))})
+        if stray:
+            raise CodegenError(
+                f"definitions[{name!r}] = {e}: a definition is a function of t and the"
+                f" parameters {sorted(str(p) for p in scene.parameters)} only; it uses {stray}"
+            )
         out.update(dict.fromkeys(fs, e))
     return out
 

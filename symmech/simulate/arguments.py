@@ -19,7 +19,9 @@ __all__ = [
     "MAX_COUNT",
     "MAX_EVENT_SAMPLES",
     "count",
+    "number",
     "numbers",
+    "parameter_values",
     "positive",
     "states",
 ]
@@ -82,3 +84,27 @@ def numbers(text: str, what: str) -> list[float]:
     if not values or not all(math.isfinite(x) for x in values):
         raise SimulationError(f"{what}: expected finite numbers, got {text!r}")
     return values
+
+
+def number(text: str, what: str) -> float:
+    """One command-line number (``"9.81"``), finite, or a SimulationError naming the option
+    ``what``: a list (``"9,81"``, a decimal comma, or ``"1 2"``) is refused, never read as
+    its first entry."""
+    values = numbers(text, what)
+    if len(values) != 1:
+        raise SimulationError(
+            f"{what}: expected one number, got {text!r} (the decimal separator is '.')"
+        )
+    return values[0]
+
+
+def parameter_values(items: list[str]) -> dict[str, float]:
+    """The ``--param NAME=VALUE`` options of a command line as ``{name: value}`` (each value
+    one number: :func:`number`), or a SimulationError naming the bad one."""
+    out: dict[str, float] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise SimulationError(f"--param: expected NAME=VALUE, got {item!r}")
+        out[name.strip()] = number(value, f"--param {name.strip()}")
+    return out

@@ -48,6 +48,11 @@ def system_for(
 ) -> HybridSystem:
     """The :class:`HybridSystem` of ``scene`` for ``target``, built once and kept with the
     scene (:meth:`symmech.Scene.attached`: it is freed with the scene)."""
+    if definitions is not None and not isinstance(definitions, Mapping):
+        raise SimulationError(
+            "definitions: expected a mapping {function of t: expression in t and the"
+            f" parameters}}, got {type(definitions).__name__}"
+        )
     # srepr, not str: symbols that print alike but differ in assumptions are different
     defs = tuple(sorted((_key(k), _key(v)) for k, v in (definitions or {}).items()))
     return scene.attached(

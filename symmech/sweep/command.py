@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from symmech.errors import SymmechError
-from symmech.simulate.arguments import numbers
+from symmech.simulate.arguments import numbers, parameter_values
 from symmech.simulate.hybrid import MAX_STEPS
 from symmech.simulate.result import STATUSES
 
@@ -97,11 +97,7 @@ def run_command(
         raise SymmechError(f"--out {out!r}: expected a .parquet folder or a .csv file")
     sf = load(args.scene)
     params = {str(k): float(v) for k, v in sf.defaults.items()}
-    for item in args.param:
-        name, sep, value = item.partition("=")
-        if not sep:
-            raise SymmechError(f"--param: expected NAME=VALUE, got {item!r}")
-        params[name.strip()] = numbers(value, f"--param {name}")[0]
+    params.update(parameter_values(args.param))
     grid = _read_grid(args.grid)  # a grid column overrides the file's default
     q0 = numbers(args.q0, "--q0") if args.q0 else None
     v0 = numbers(args.v0, "--v0") if args.v0 else None

@@ -1,0 +1,90 @@
+"""Hostile and careless input, round 3 (issue 26): the items fixed so far, each with the
+input that used to pass silently or crash."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+import sympy as sp
+from test_cli import symmech
+
+import symmech as sm
+from symmech.codegen import CodegenError
+from symmech.declaration.symbols import t
+from symmech.simulate import SimulationError
+
+
+def _floor_at_h() -> sm.Scene:
+    """A ball over the floor y = h(t), h given by the run's definitions."""
+    y = sm.coordinates(["y"])[0]
+    m, g = sp.symbols("m g", positive=True)
+    h = sp.Function("h")(t)
+    wall = sm.Wall(y - h, restitution=sp.Rational(1, 2), name="floor")
+    return sm.Scene([y], metric=[[m]], potential=m * g * y, walls=[wall], name="floor_at_h")
+
+
+PARAMS = {"m": 1.0, "g": 9.81}
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy"])
+def test_a_definition_is_a_function_of_t_and_the_parameters_only(backend):
+    """{"h": y - 1} made the wall vanish (the ball fell through), {"h": ydot} crashed gcc:
+    a definition naming a coordinate, a velocity, a foreign symbol or another function is
+    refused, naming what it uses."""
+    scene = _floor_at_h()
+    y, yd = scene.declaration.coordinates[0], scene.declaration.velocities[0]
+    bad = {
+        "y": y - 1,
+        "ydot": yd,
+        "zz": sp.Symbol("zz"),
+        "k(t)": sp.Function("k")(t),
+    }
+    for used, value in bad.items():
+        why = rf"function of t and the parameters .* uses \['{re.escape(used)}'\]"
+        with pytest.raises(CodegenError, match=why):
+            sm.simulate(
+                scene, [1.0], [0.0], 1.0, params=PARAMS, backend=backend,
+                definitions={"h": value},
+            )  # fmt: skip
+    res = sm.simulate(
+        scene, [1.0], [0.0], 1.0, params=PARAMS, backend=backend,
+        definitions={"h": "0.1*sin(t)"},
+    )  # fmt: skip
+    assert res.status == "finished" and res.stats["impacts"] >= 1
+
+
+@pytest.mark.parametrize("given", ["h", ["h"], 3])
+def test_definitions_that_are_not_a_mapping_are_refused(given):
+    with pytest.raises(SimulationError, match="definitions: expected a mapping"):
+        sm.simulate(_floor_at_h(), [1.0], [0.0], 1.0, params=PARAMS, definitions=given)
+
+
+@pytest.mark.parametrize("value", ["9,81", "1,2,3", "9 81"])
+def test_a_parameter_on_the_command_line_is_one_number(tmp_path: Path, value: str):
+    """--param g=9,81 (a decimal comma) ran with g = 9, exit 0."""
+    proc = symmech("simulate", "bouncing_ball", "--param", f"g={value}", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "--param g: expected one number" in proc.stderr
+    assert proc.stderr.count("\n") == 1
+
+
+def test_a_negative_event_count_is_refused(tmp_path: Path):
+    """--events -5 printed 'events: 5' and then '... 10 more'."""
+    proc = symmech("simulate", "bouncing_ball", "--events", "-5", "--quiet", cwd=tmp_path)
+    assert proc.returncode == 2 and "expected a number >= 0" in proc.stderr
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ("simulate", "bouncing_ball", "--backend", "scipy", "--method", "evil"),
+        ("bench", "bouncing_ball", "--routes", "scipy:evil", "--no-baseline"),
+    ],
+)
+def test_an_unknown_method_is_bad_input_not_an_internal_error(tmp_path: Path, args):
+    """Both used to end as "internal error", exit 3."""
+    proc = symmech(*args, "--quiet", cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert "method 'evil' is not available with backend='scipy'" in proc.stderr
