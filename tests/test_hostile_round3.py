@@ -88,3 +88,25 @@ def test_an_unknown_method_is_bad_input_not_an_internal_error(tmp_path: Path, ar
     proc = symmech(*args, "--quiet", cwd=tmp_path)
     assert proc.returncode == 2, proc.stderr
     assert "method 'evil' is not available with backend='scipy'" in proc.stderr
+
+
+@pytest.mark.parametrize("backend", ["c", "numpy", "scipy"])
+def test_short_time_scales_and_tiny_atol_run_and_locate_events_relatively(backend):
+    """The step floor and the event location were absolute near t = 0: g = 1e8, h = 1e-12
+    (first impact at 1.4e-10 s) ended 'step size ... too small at t = 0' on C and NumPy
+    and was off by 3e-6 relative on SciPy; atol = 1e-30 failed likewise.  Now the run's
+    time scale min(1, |t_end|) sets them: the impact time of sqrt(2h/g) to 1e-14 relative."""
+    from symmech.examples import bouncing_ball
+
+    scene = bouncing_ball()
+    p = {"m": 1.0, "g": 1e8, "alpha": 0.5}
+    res = sm.simulate(
+        scene, [1e-12], [0.0], 3e-10, params=p, backend=backend, rtol=1e-10, atol=1e-22
+    )
+    assert res.status == "finished", res.message
+    first = res.impacts()[0].time
+    assert first == pytest.approx((2e-12 / 1e8) ** 0.5, rel=1e-14)
+    p = {"m": 1.0, "g": 9.81, "alpha": 0.5}
+    res = sm.simulate(scene, [1.0], [0.0], 1.0, params=p, backend=backend, atol=1e-30)
+    assert res.status == "finished", res.message
+    assert res.impacts()[0].time == pytest.approx((2 / 9.81) ** 0.5, rel=1e-12)

@@ -31,9 +31,12 @@ def find_root(
     gb: Any,
     eps: float,
     max_iter: int = 200,
+    time_scale: Any = 1,
 ) -> tuple[Any, Any, Any, Any]:
     """The bracket ``[a, b]`` narrowed around a sign change of ``g`` (``ga >= 0 > gb``)
-    until ``b - a <= 4 eps max(|a|, |b|, 1)`` or ``g`` vanishes; returns
+    until ``b - a <= 4 eps max(|a|, |b|, time_scale)`` or ``g`` vanishes (``time_scale``:
+    the run's, ``min(1, |t_end|)``, so that an event at 1e-10 s is located to a few ulps
+    of its own size); returns
     ``(a, b, g(a), g(b))`` with ``g(a) >= 0 > g(b)`` still (Anderson & Bjorck, BIT 13
     (1973) 253: regula falsi with the retained end's value scaled by ``1 - g(c)/g(new)``
     when the same end is kept twice, or by 1/2 when that factor is not positive; a bisection
@@ -45,7 +48,7 @@ def find_root(
     widths = [2 * (b - a)] * 3
     for _ in range(max_iter):
         width = b - a
-        scale = max(abs(a), abs(b), 1)
+        scale = max(abs(a), abs(b), time_scale)
         tol = 2 * eps * scale
         if width <= 2 * tol or (ga == 0 and side != 0):
             break  # narrow enough, or an evaluated point is an exact root

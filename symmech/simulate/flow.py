@@ -119,10 +119,13 @@ class RKFlow:
             h = min(self.h, self.max_step, left)
             if left - h < 4 * eps * abs(self.t_bound):  # do not leave a sliver
                 h = left
-            # a step the controller shrank below the resolution of t is a failure; the
-            # last step to t_bound is taken however short (an impact a few ulps before
-            # t_end leaves such a span)
-            if h < left and h <= 8 * eps * max(abs(t), 1.0):
+            # a step the controller shrank below the resolution of t is a failure; near
+            # t = 0 the floor is eps of the run's time scale min(1, |t_end|) (a run to
+            # 1e-9 s, or a first step of 1e-21 s for atol = 1e-30, is resolved); the last
+            # step to t_bound is taken however short (an impact a few ulps before t_end
+            # leaves such a span)
+            scale = eps * min(1.0, abs(self.t_bound))
+            if h < left and h <= 8 * eps * max(abs(t), scale):
                 raise FlowFailure(f"step size {h:.3g} too small at t = {t!r}")
             jac = self._jac if self.stepper.implicit else None
             st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)

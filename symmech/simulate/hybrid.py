@@ -140,6 +140,9 @@ class _Run:
         self.energy_drift = 0.0
         self.drift = 0.0
         self.tol_psi = 10 * opts.atol
+        #: the run's time scale, min(1, |t_end|): the resolution of t near t = 0 is
+        #: measured against it (step floor, event location, difference steps)
+        self.time_scale = min(1, abs(opts.t_end))
         self.condition = 1.0
         #: walls grazed and not yet left (psi < 0 at every accepted step end since): a
         #: start inside such a wall is not an event again
@@ -247,7 +250,7 @@ class _Run:
         return max(self.o.zeno_factor * self.tol_v(y), (2 * acc * resolution) ** 0.5)
 
     def _free_psi_acceleration(self, wall: int, y: np.ndarray) -> float:
-        h = 1e-6 * max(1.0, abs(self.t))
+        h = 1e-6 * max(self.time_scale, abs(self.t))
         ydot = self.f.rhs((), self.t, y)
         r0 = self.f.rate(wall, self.t, y, ydot)
         y1 = y + h * ydot
@@ -348,7 +351,10 @@ class _Run:
                     if ghi == 0:  # a contact force reaching exactly zero at the sample
                         a = hi
                     else:
-                        a = self.polish(seg, i, *find_root(g, lo, hi, glo, ghi, self.f.eps))
+                        bracket = find_root(
+                            g, lo, hi, glo, ghi, self.f.eps, time_scale=self.time_scale
+                        )
+                        a = self.polish(seg, i, *bracket)
                     if best is None or a < best[0]:
                         best = (a, state(a), *funcs[i])
                 return best
@@ -371,10 +377,11 @@ class _Run:
             c = b - fb * (b - a) / (fb - fa)
             fc = g(c, refine(c))
             a, fa, b, fb = b, fb, c, fc
-            if abs(b - a) <= 4 * self.f.eps * max(abs(b), 1):
+            if abs(b - a) <= 4 * self.f.eps * max(abs(b), self.time_scale):
                 break
         lo = min(a, b)
-        return lo if g(lo, refine(lo)) >= 0 else lo - 4 * self.f.eps * max(abs(lo), 1)
+        step = 4 * self.f.eps * max(abs(lo), self.time_scale)
+        return lo if g(lo, refine(lo)) >= 0 else lo - step
 
     @staticmethod
     def _dip(ts: list[float], gs: list[float]) -> float | None:

@@ -227,6 +227,13 @@ static int all_finite(int size, const double *x)
     return 1;
 }
 
+/* the run's time scale, min(1, |t_end|): the resolution of t near t = 0 is measured
+   against it (step floor, event location, difference steps; hybrid._Run.time_scale) */
+static double time_scale(const sim_t *s)
+{
+    return fabs(s->t_end) < 1.0 ? fabs(s->t_end) : 1.0;
+}
+
 static void fail_call(sim_t *s, int function)
 {
     if (s->status == ST_RUNNING) {
@@ -449,7 +456,9 @@ static int flow_advance(sim_t *s)
         h = s->h < s->max_step ? s->h : s->max_step;
         h = left < h ? left : h;
         if (left - h < 4 * EPS * fabs(s->t_end)) h = left;
-        if (h < left && h <= 8 * EPS * (fabs(t) > 1.0 ? fabs(t) : 1.0)) { /* flow.py */
+        /* below the resolution of t; near t = 0, eps of the run's time scale (flow.py) */
+        const double scale = EPS * time_scale(s);
+        if (h < left && h <= 8 * EPS * (fabs(t) > scale ? fabs(t) : scale)) {
             s->d[0] = h;
             s->d[1] = t;
             return stop(s, ST_FAILED, R_STEP_SMALL);
@@ -740,7 +749,7 @@ static int event(sim_t *s, int kind, int wall, const double *ym, const double *y
 /* second derivative of psi along the free flow at a moving wall (forward difference) */
 static double free_psi_acceleration(sim_t *s, int w, const double *y)
 {
-    double h = 1e-6 * (fabs(s->t) > 1.0 ? fabs(s->t) : 1.0);
+    double h = 1e-6 * (fabs(s->t) > time_scale(s) ? fabs(s->t) : time_scale(s));
     double *ydot = s->w1, *y1 = s->w2;
     rhs(s, -1, s->t, y, ydot);
     double r0 = rate(s, w, s->t, y, ydot);
@@ -833,7 +842,7 @@ static double find_root(sim_t *s, const funcs_t *F, int i, double a, double b, d
     for (int it = 0; it < 200; ++it) {
         double width = b - a;
         double scale = fabs(a) > fabs(b) ? fabs(a) : fabs(b);
-        scale = scale > 1 ? scale : 1;
+        scale = scale > time_scale(s) ? scale : time_scale(s);
         double tol = 2 * EPS * scale;
         if (width <= 2 * tol || (ga == 0 && side != 0)) break;
         double c = a + width * wa / (wa - wb);
