@@ -110,3 +110,17 @@ def test_short_time_scales_and_tiny_atol_run_and_locate_events_relatively(backen
     res = sm.simulate(scene, [1.0], [0.0], 1.0, params=p, backend=backend, atol=1e-30)
     assert res.status == "finished", res.message
     assert res.impacts()[0].time == pytest.approx((2 / 9.81) ** 0.5, rel=1e-12)
+
+
+def test_far_from_t0_every_backend_refuses_a_motion_below_the_resolution_of_t():
+    """t0 = 1e16 (t resolved to 2 s), a ball dropped from 1 m: C and NumPy failed 'step size
+    too small', while SciPy reported the ball at rest on the floor after no impact."""
+    from symmech.examples import bouncing_ball
+
+    p = {"m": 1.0, "g": 9.81, "alpha": 0.5}
+    for backend in ("c", "numpy", "scipy"):
+        res = sm.simulate(
+            bouncing_ball(), [1.0], [0.0], 1e16 + 10, t0=1e16, params=p, backend=backend
+        )
+        assert res.status == "failed", (backend, res.message)
+        assert res.message.startswith("step size ") and "too small at t = 1e+16" in res.message

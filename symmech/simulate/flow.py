@@ -224,9 +224,22 @@ class ScipyFlow:
     def advance(self) -> Segment:
         s = self.solver
         t0, y0 = float(s.t), s.y.copy()
+        # the loops' rule (RKFlow.advance): a step the controller wants at the resolution
+        # of t is a failure (SciPy would step by ulps of t, far from t = 0, and take a
+        # wall for a contact it cannot resolve)
+        eps = float(np.finfo(float).eps)
+        floor = 8 * eps * max(abs(t0), eps * min(1.0, abs(self.t_bound)))
+        wanted = getattr(s, "h_abs", None)
+        if wanted is not None and wanted < self.t_bound - t0 and wanted <= floor:
+            raise FlowFailure(f"step size {wanted:.3g} too small at t = {t0!r}")
         message = s.step()
         if s.status == "failed":
             raise FlowFailure(f"scipy {self.cls.__name__}: {message}")
+        h = float(s.t) - t0
+        if float(s.t) < self.t_bound and h <= floor:
+            raise FlowFailure(f"step size {h:.3g} too small at t = {t0!r}")
+        if not (np.all(np.isfinite(s.y))):
+            raise FlowFailure(f"the right-hand side is not finite at t = {t0!r}")
         self.stats.steps += 1
         self._collect()
         # the solver's proposal for its next step (h_abs of SciPy's RK, Radau and BDF
