@@ -63,10 +63,10 @@ from symmech.bench.commands import COMMANDS, add_commands, run_command
 from symmech.bench.simulate_command import add_command as add_simulate_command
 from symmech.bench.simulate_command import run_command as run_simulate_command
 from symmech.codegen.escape import file_name, terminal
-from symmech.codegen.output_files import write_text_atomic
 from symmech.derivation import MAX_DETAILED_N, Derivation, derivation
 from symmech.errors import SceneError, SymmechError
 from symmech.examples import EXAMPLES, example
+from symmech.files import write_text_atomic
 from symmech.scenefile import (
     SceneFile,
     builtin_scene_names,

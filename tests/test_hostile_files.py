@@ -22,8 +22,8 @@ from test_cli import EXIT_INPUT, PROGRESS, assert_one_line_error, symmech
 import symmech as sm
 from symmech.codegen import generate
 from symmech.codegen.escape import terminal
-from symmech.codegen.output_files import FILE_MODE, write_text_atomic
 from symmech.examples import carnot_3_7
+from symmech.files import FILE_MODE, write_text_atomic
 
 ESC = "\x1b[31m\x1b]0;pwned\x07"  # recolour, and retitle the terminal
 RAW_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f]")

@@ -124,3 +124,32 @@ def test_far_from_t0_every_backend_refuses_a_motion_below_the_resolution_of_t():
         )
         assert res.status == "failed", (backend, res.message)
         assert res.message.startswith("step size ") and "too small at t = 1e+16" in res.message
+
+
+def test_plots_tables_and_scene_files_replace_a_link_never_write_through_it(tmp_path: Path):
+    """`symmech bench --plot LINK.png` wrote through a symbolic link and overwrote its
+    target; every output file now goes through one writer (symmech.files.write_atomic)."""
+    pytest.importorskip("matplotlib")
+    target = tmp_path / "precious.txt"
+    target.write_text("keep me")
+    for name in ("plot.png", "table.csv", "scene.toml"):
+        (tmp_path / name).symlink_to(target)
+    proc = symmech(
+        "bench", "bouncing_ball", "--routes", "c:dop853", "--tolerances", "1e-6",
+        "--repeats", "1", "--no-baseline", "--plot", "plot.png", "--quiet", cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    grid = tmp_path / "grid.csv"
+    grid.write_text("q0[0]\n1.0\n")
+    proc = symmech(
+        "sweep", "bouncing_ball", "--grid", "grid.csv", "--out", "table.csv", "--t-end", "1",
+        "--v0", "0", "--quiet", cwd=tmp_path,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    sm.save_scene(sm.load_scene("bouncing_ball"), tmp_path / "scene.toml")
+    assert target.read_text() == "keep me"
+    for name in ("plot.png", "table.csv", "scene.toml"):
+        path = tmp_path / name
+        assert path.is_file() and not path.is_symlink(), name
+    assert (tmp_path / "plot.png").read_bytes()[:4] == b"\x89PNG"
+    assert "q0[0]" in (tmp_path / "table.csv").read_text()

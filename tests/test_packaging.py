@@ -20,6 +20,7 @@ PKG = ROOT / "symmech"
 # codegen -> simulate -> sweep -> verify/bench -> cli
 LAYERS = [
     "errors",
+    "files",
     "algebra",
     "declaration",
     "geometry",

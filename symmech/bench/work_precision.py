@@ -16,6 +16,7 @@ draws error against run time on log-log axes (matplotlib, the ``plot`` extra).
 from __future__ import annotations
 
 import math
+import os
 import statistics
 import time
 from collections.abc import Sequence
@@ -27,6 +28,7 @@ import numpy as np
 import symmech.simulate as simulate_pkg
 from symmech.bench.baseline import baseline_run, prepare
 from symmech.bench.cases import Case, bouncing_ball_state, bouncing_ball_times
+from symmech.files import write_atomic
 from symmech.simulate.reference import as_float, reference_run
 
 __all__ = ["Reference", "Row", "format_table", "measure", "plot", "reference", "rows"]
@@ -248,5 +250,12 @@ def plot(case: Case, table: Sequence[Row], path: str) -> None:
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    # through the one writer of output files: a link at ``path`` is replaced, not followed
+    write_atomic(path, lambda fh: fig.savefig(fh, format=_image_format(path), dpi=120))
     plt.close(fig)
+
+
+def _image_format(path: str) -> str:
+    """The image format of ``path``'s suffix (PNG when it names none)."""
+    suffix = os.path.splitext(str(path))[1].lower().lstrip(".")
+    return suffix or "png"

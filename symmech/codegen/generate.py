@@ -23,10 +23,10 @@ import sympy as sp
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
 from symmech.codegen.escape import file_name
 from symmech.codegen.lower import LoweredFunction, Memo, Names, lower
-from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import Block, CodegenError, ScenePlan, build_plan
 from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
 from symmech.declaration.symbols import t as TIME
+from symmech.files import write_text_atomic
 
 if TYPE_CHECKING:
     from symmech.codegen.module import SceneModule
@@ -76,7 +76,7 @@ class GeneratedCode:
 
         Each file is written atomically and a symbolic link planted in ``folder`` under a
         generated file's name is replaced, never written through
-        (:func:`~symmech.codegen.output_files.write_text_atomic`).  File names are the
+        (:func:`~symmech.files.write_text_atomic`).  File names are the
         safe, short stems of :func:`~symmech.codegen.escape.file_name`."""
         out = Path(folder)
         out.mkdir(parents=True, exist_ok=True)

@@ -61,10 +61,10 @@ from symmech.codegen.build import (
     trusted_file,
 )
 from symmech.codegen.callers import Fast, NumericalError, Raw, c_raw, numpy_fast, numpy_raw
-from symmech.codegen.output_files import write_text_atomic
 from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule, check_parameters, real_array
 from symmech.errors import SymmechError
+from symmech.files import write_text_atomic
 
 if TYPE_CHECKING:
     from symmech.codegen.generate import GeneratedCode

@@ -19,6 +19,7 @@ from symmech.declaration.expressions import (
 from symmech.declaration.symbols import t as TIME
 from symmech.declaration.symbols import velocity_of
 from symmech.errors import ExpressionError
+from symmech.files import write_text_atomic
 from symmech.scene import Scene
 from symmech.scenefile.format import (
     _IDENTIFIER,
@@ -370,6 +371,4 @@ def save_scene(
 ) -> Path:
     """Write :func:`dump_scene` of ``scene`` to ``path``; return the path."""
     text = dump_scene(scene, defaults=defaults, description=description, functions=functions)
-    p = Path(path)
-    p.write_text(text, encoding="utf-8")
-    return p
+    return write_text_atomic(path, text)

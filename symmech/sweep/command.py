@@ -15,13 +15,14 @@
 from __future__ import annotations
 
 import argparse
-import os
-import tempfile
+import io
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError
+from symmech.files import write_atomic
 from symmech.simulate.arguments import numbers, parameter_values
 from symmech.simulate.hybrid import MAX_STEPS
 from symmech.simulate.result import STATUSES
@@ -71,16 +72,16 @@ def _read_grid(path: str) -> Any:
 
 
 def _write_csv(table: Any, path: str) -> None:
-    """Write ``table`` to ``path`` atomically (a temporary file renamed into place)."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(prefix=".sweep-", suffix=".csv", dir=folder)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as handle:
-            table.to_csv(handle)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Write ``table`` to ``path`` atomically (:func:`~symmech.files.write_atomic`: a link
+    at ``path`` is replaced, never written through)."""
+
+    def produce(fh: Any) -> None:
+        text = io.TextIOWrapper(fh, encoding="utf-8", newline="")
+        table.to_csv(text)
+        text.flush()
+        text.detach()  # the binary handle stays open for write_atomic
+
+    write_atomic(path, produce)
 
 
 def run_command(
@@ -143,5 +144,5 @@ def run_command(
     for status in (*STATUSES, "invalid"):
         if counts.get(status):
             print(f"{status}: {counts[status]}")
-    print(f"wrote {out}")
+    print(terminal(f"wrote {out}"))
     return 0
