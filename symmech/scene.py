@@ -49,8 +49,14 @@ _LATEX_MAX_ENTRIES = 64
 
 
 def _scene_of_declaration(decl: Declaration) -> Scene:
-    """The Scene of a validated declaration (for unpickling; see :meth:`Scene.__reduce__`)."""
-    scene = object.__new__(Scene)
+    """The Scene of an unpickled declaration, validated again like any other declaration
+    (a pickle from a file or another process is input): the scene is declared anew from
+    the declaration's arguments (:meth:`Scene.__reduce__`)."""
+    if not isinstance(decl, Declaration):
+        raise SceneError(f"unpickling a Scene: expected a Declaration, got {type(decl).__name__}")
+    args = decl.arguments()
+    Scene(args.pop("coordinates"), **args)  # the checks of a new declaration; raises
+    scene = object.__new__(Scene)  # the declaration as it was pickled, now checked
     object.__setattr__(scene, "_decl", decl)
     object.__setattr__(scene, "_Scene__derived", {})
     return scene
@@ -181,7 +187,8 @@ class Scene:
 
     # -- pickling -----------------------------------------------------------------------
     def __reduce__(self) -> tuple[Callable[[Declaration], Scene], tuple[Declaration]]:
-        """Pickle the validated declaration only: the copy is not validated again and
+        """Pickle the declaration only: the copy is declared and validated again from it
+        (a pickle is input: a crafted one is refused as its declaration would be) and
         derives what it is asked for afresh (the cache of derived quantities, which may
         hold loaded code, does not travel).  A sweep's Dask workers receive scenes so."""
         return _scene_of_declaration, (self._decl,)

@@ -153,3 +153,28 @@ def test_plots_tables_and_scene_files_replace_a_link_never_write_through_it(tmp_
         assert path.is_file() and not path.is_symlink(), name
     assert (tmp_path / "plot.png").read_bytes()[:4] == b"\x89PNG"
     assert "q0[0]" in (tmp_path / "table.csv").read_text()
+
+
+def test_an_unpickled_scene_is_validated_like_any_declaration():
+    """A pickle from a Dask worker or a file is input: a crafted declaration whose floor is
+    psi = y**2 (no gradient on the wall: the ball went through it) is refused on loading."""
+    import dataclasses
+    import pickle
+
+    from symmech.errors import SceneError
+    from symmech.examples import bouncing_ball
+
+    scene = bouncing_ball()
+    y = scene.declaration.coordinates[0]
+    decl = scene.declaration
+    bad_wall = dataclasses.replace(
+        decl.walls[0], psi=y**2, wall=dataclasses.replace(decl.walls[0].wall, psi=y**2)
+    )
+    crafted = object.__new__(sm.Scene)
+    object.__setattr__(crafted, "_decl", dataclasses.replace(decl, walls=(bad_wall,)))
+    object.__setattr__(crafted, "_Scene__derived", {})
+    data = pickle.dumps(crafted)
+    with pytest.raises(SceneError, match="psi"):
+        pickle.loads(data)
+    good = pickle.loads(pickle.dumps(scene))
+    assert good.declaration == scene.declaration
