@@ -178,3 +178,52 @@ def test_an_unpickled_scene_is_validated_like_any_declaration():
         pickle.loads(data)
     good = pickle.loads(pickle.dumps(scene))
     assert good.declaration == scene.declaration
+
+
+def _tiny_sources() -> dict[str, str]:
+    return {"tiny.c": "double tiny_answer(void) { return 42.0; }\n"}
+
+
+def test_a_relative_cache_folder_works(tmp_path: Path, monkeypatch):
+    """A relative SYMMECH_CACHE_DIR broke every C build (gcc's -o relative to its build
+    folder)."""
+    import ctypes
+
+    from symmech.codegen.build import compile_library, load_library
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("SYMMECH_CACHE_DIR", "relative_cache")
+    path = compile_library(_tiny_sources())
+    assert path.is_absolute() and path.parent == tmp_path / "relative_cache"
+    fn = load_library(path).tiny_answer
+    fn.restype = ctypes.c_double
+    assert fn() == 42.0
+
+
+def test_a_cache_path_that_is_a_file_is_refused_with_its_name(tmp_path: Path):
+    from symmech.codegen import CompileError
+    from symmech.codegen.build import compile_library
+
+    blocker = tmp_path / "not_a_folder"
+    blocker.write_text("x")
+    with pytest.raises(CompileError, match=r"cache folder .*not_a_folder"):
+        compile_library(_tiny_sources(), cache=blocker)
+    with pytest.raises(CompileError, match=r"cache folder .*not_a_folder"):
+        compile_library(_tiny_sources(), cache=blocker / "below")
+
+
+def test_a_truncated_cached_library_is_rebuilt_not_loaded(tmp_path: Path):
+    """A truncated library of the same user (a full disk, a killed copy) crashed the
+    process with a bus error when loaded; its digest no longer matches and it is rebuilt."""
+    import ctypes
+
+    from symmech.codegen.build import compile_library, load_library
+
+    path = compile_library(_tiny_sources(), cache=tmp_path)
+    full = path.read_bytes()
+    path.write_bytes(full[: len(full) // 3])
+    again = compile_library(_tiny_sources(), cache=tmp_path)
+    assert again == path and again.read_bytes() == full
+    fn = load_library(again).tiny_answer
+    fn.restype = ctypes.c_double
+    assert fn() == 42.0

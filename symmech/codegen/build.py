@@ -9,7 +9,11 @@ concurrent builds of the same code do not collide.
 A cached library is code this process runs, so the cache is trusted only as far as its
 owner: a folder writable by other users must be sticky (``/tmp``), and a cached file is
 reused only when it is a regular file owned by this user and writable by no one else
-(:func:`trusted_file`); otherwise it is rebuilt.
+(:func:`trusted_file`) and its SHA-256 matches the digest written beside it at build time
+(a truncated library, which loading could crash on, is rebuilt); otherwise it is rebuilt.
+A relative cache path is taken from the current folder (made absolute before the compiler
+runs in its build folder); a cache path that is not a usable folder is a
+:class:`CompileError` naming it.
 """
 
 from __future__ import annotations
@@ -78,8 +82,17 @@ def cache_dir(path: str | Path | None = None) -> Path:
         else:
             base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
             path = Path(base) / "symmech"
-    folder = Path(path)
-    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    # absolute: the compiler runs in a build folder, where a relative path means another place
+    folder = Path(path).expanduser().absolute()
+    try:
+        folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+        if not folder.is_dir():
+            raise NotADirectoryError(20, "not a folder")
+    except OSError as exc:
+        raise CompileError(
+            f"cache folder {folder}: {exc.strerror or exc}; give a folder this user can write"
+            " (SYMMECH_CACHE_DIR, or cache=...)"
+        ) from None
     if hasattr(os, "getuid"):
         st = folder.stat()
         shared = st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
@@ -148,7 +161,7 @@ def compile_library(
     key = library_key(cc, flags, sources)
     folder = cache_dir(cache)
     library = folder / (filename or "symmech_{key}.so").format(key=key)
-    if trusted_file(library):
+    if trusted_file(library) and _intact(library):
         return library
     with tempfile.TemporaryDirectory(prefix="build_", dir=folder) as tmp:
         work = Path(tmp)
@@ -170,14 +183,38 @@ def compile_library(
                 f"{' '.join(cmd)} failed with exit code {result.returncode}:\n"
                 + (result.stderr or result.stdout).strip()
             )
+        digest = work / (library.name + ".sha256")
+        digest.write_text(_sha256(target), encoding="utf-8")
         try:
             os.replace(target, library)
+            os.replace(digest, _digest_path(library))
         except OSError as exc:
             raise CompileError(
                 f"cannot put the library in place at {library}: {exc.strerror} (a file of"
                 " that name that this user may not replace: use a private cache folder)"
             ) from None
     return library
+
+
+def _digest_path(library: Path) -> Path:
+    return library.with_name(library.name + ".sha256")
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _intact(library: Path) -> bool:
+    """Whether a cached library is the file that was built: its SHA-256 matches the digest
+    written beside it at build time (a truncated or altered library, which loading could
+    crash on, is rebuilt)."""
+    digest = _digest_path(library)
+    if not trusted_file(digest):
+        return False
+    try:
+        return digest.read_text(encoding="utf-8").strip() == _sha256(library)
+    except OSError:
+        return False
 
 
 def load_library(path: str | Path) -> ctypes.CDLL:
