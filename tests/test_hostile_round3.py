@@ -41,6 +41,13 @@ def test_a_definition_is_a_function_of_t_and_the_parameters_only(backend):
         "zz": sp.Symbol("zz"),
         "k(t)": sp.Function("k")(t),
     }
+    for value, why in ((sp.zeta(t), "calls zeta"), (sp.I * t, "is not real")):
+        # printed nowhere (PrintMethodNotImplementedError from the C printer before)
+        with pytest.raises(CodegenError, match=why):
+            sm.simulate(
+                scene, [1.0], [0.0], 1.0, params=PARAMS, backend=backend,
+                definitions={"h": value},
+            )  # fmt: skip
     for used, value in bad.items():
         why = rf"function of t and the parameters .* uses \['{re.escape(used)}'\]"
         with pytest.raises(CodegenError, match=why):

@@ -57,6 +57,7 @@ from symmech.codegen.blocks import (
 )
 from symmech.codegen.closed_form_budget import closed_form_cost
 from symmech.codegen.kinds import SCENE_BUILDERS, WALL_BUILDERS, BuildContext
+from symmech.declaration.admissible import expression_problems
 from symmech.declaration.expressions import to_expression
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
@@ -276,7 +277,11 @@ def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Exp
             e = to_expression(value, names, field=f"definitions[{name!r}]")
         except SymmechError as exc:
             raise CodegenError(str(exc)) from None
-        # a definition is a function of t and the parameters only, whatever its type
+        # what a scene's own fields may hold (declaration.admissible: elementary functions,
+        # real, finite), and a function of t and the parameters only, whatever its type
+        problems = expression_problems(e)
+        if problems:
+            raise CodegenError(f"definitions[{name!r}] = {e}: {'; '.join(problems)}")
         stray = sorted(str(x) for x in e.free_symbols if x not in set(names.values()))
         stray += sorted({str(a) for a in atoms(e, (AppliedUndef,))})
         if stray:

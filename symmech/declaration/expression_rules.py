@@ -16,6 +16,7 @@ from typing import NoReturn
 
 import sympy as sp
 
+from symmech.declaration.admissible import ELEMENTARY_FUNCTIONS
 from symmech.declaration.constants import (
     MAX_NUMBER_BITS,
 )
@@ -40,24 +41,12 @@ MAX_DEGREE = 256
 # factoring of larger integers get slow).
 _MAX_NUMBER_BITS = MAX_NUMBER_BITS
 
-#: The functions a string may call: name -> sympy function.  All are smooth (analytic)
-#: where defined.  ``atan2`` takes two arguments ``(y, x)``, the others one.
+#: The functions a string may call: name -> sympy function, the elementary functions a
+#: scene's fields may hold (:data:`symmech.declaration.admissible.ELEMENTARY_FUNCTIONS`,
+#: one list for both) and ``sqrt``.  All are smooth (analytic) where defined.  ``atan2``
+#: takes two arguments ``(y, x)``, the others one.
 ALLOWED_FUNCTIONS: Mapping[str, Callable[..., sp.Expr]] = MappingProxyType(
-    {
-        "sin": sp.sin,
-        "cos": sp.cos,
-        "tan": sp.tan,
-        "asin": sp.asin,
-        "acos": sp.acos,
-        "atan": sp.atan,
-        "atan2": sp.atan2,
-        "sinh": sp.sinh,
-        "cosh": sp.cosh,
-        "tanh": sp.tanh,
-        "exp": sp.exp,
-        "log": sp.log,
-        "sqrt": sp.sqrt,
-    }
+    {**{f.__name__: f for f in ELEMENTARY_FUNCTIONS}, "sqrt": sp.sqrt}
 )
 _ARITY = {"atan2": 2}
 
