@@ -451,12 +451,15 @@ def test_numpy_solve_refuses_non_finite_inputs_for_one_state_and_a_batch():
 
 @pytest.mark.parametrize("value", [sp.zoo, sp.oo, -sp.oo, sp.nan])
 def test_an_entry_that_is_not_finite_is_refused_with_its_place(value):
-    """An input defined as an infinity (or nan) makes the forcing's entry singular for
-    every state: generation refuses it, naming the function, the block and the entry."""
+    """An input defined as an infinity (or nan) would make the forcing's entry singular
+    for every state: generation refuses the definition itself, by the admissibility rules
+    of a scene's fields, naming it."""
     x = sp.Symbol("x", real=True)
     f = sp.Function("f")
     scene = sm.Scene((x,), metric=sp.eye(1), forces=[f(sm.t)], name="pushed")
-    with pytest.raises(codegen.CodegenError, match=r"forcing: out\[0\] is not finite"):
+    with pytest.raises(
+        codegen.CodegenError, match=r"definitions\['f'\] = .*infinite or undefined value"
+    ):
         codegen.generate(scene, "numpy", definitions={f: value})
 
 
