@@ -170,3 +170,22 @@ def test_the_ladder_falls_flat_and_its_top_lands_while_the_foot_is_held(backend)
     values.update(dict(zip(scene.declaration.coordinates, hit.q, strict=True)))
     want = np.array(pair.apply(list(hit.v_minus)).xreplace(values), dtype=float).ravel()
     np.testing.assert_allclose(hit.v_plus, want, atol=1e-9)
+
+
+def test_a_sweep_builds_the_contact_sets_in_and_its_rows_equal_single_runs():
+    """A sweep's chunks run the library they are sent, so the sweep builds every set of
+    its (at most 4) static walls in first: rods that come to rest on both ends finish, and
+    each row equals simulate(...) of its state bit for bit."""
+    pytest.importorskip("pandas")
+    scene = sm.load_scene("falling_rod")  # a fresh scene: no set reached before
+    params = {"alpha": 0.5, "g": G, "l": 1.0, "m": 1.0}
+    heights = [1.0, 1.5, 2.0]
+    table = sm.sweep(
+        scene, {"q0[1]": heights}, 4.0, q0=[0.0, 1.0, 0.0], v0=[0.3, 0.0, 0.0], params=params,
+        threads=1,
+    )  # fmt: skip
+    assert list(table["status"]) == ["finished"] * 3
+    for i, h in enumerate(heights):
+        res = sm.simulate(scene, [0.0, h, 0.0], [0.3, 0.0, 0.0], 4.0, params=params)
+        assert table["y_final"].iloc[i] == res.q[-1, 1] == 0.0
+        assert table["xdot_final"].iloc[i] == res.v[-1, 0]

@@ -24,6 +24,7 @@ kind) and the chosen ``outputs`` and ``expressions``, indexed by ``run`` (the gr
 from __future__ import annotations
 
 import hashlib
+import itertools
 import os
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -43,7 +44,7 @@ from symmech.simulate.hybrid import Options
 from symmech.simulate.options import RunOptions
 from symmech.simulate.parameters import real_number
 from symmech.simulate.run import system_for
-from symmech.simulate.system import SimulationError
+from symmech.simulate.system import HybridSystem, SimulationError
 from symmech.sweep.chunks import FIXED_COLUMNS, INFO_OUTPUTS, Plan
 from symmech.sweep.grid import read_grid, resolve_columns
 from symmech.sweep.runner import Progress, run_dask, run_local
@@ -72,6 +73,29 @@ def _loop(opts: RunOptions, t_end: object, width: int) -> tuple[Options, LoopOpt
     loop = opts.loop(tend)
     index, vec = options_vector(loop, method, opts.step_cap(tend), opts.t0)
     return loop, LoopOptions(t0=opts.t0, method=index, vector=vec, width=width)
+
+
+#: A sweep builds the contact modes of every set of at most this many static walls into
+#: its library before it runs (its chunks cannot build one on the way, as ``simulate``
+#: does: they run the library they were sent).
+SWEEP_CONTACT_WALLS = 4
+
+
+def build_contact_sets(system: HybridSystem) -> None:
+    """Build the contact mode of every set of two or more static walls into the C library
+    of ``system`` when the scene has at most :data:`SWEEP_CONTACT_WALLS` of them (a set
+    that cannot be held, statically indeterminate or dependent, is left out: a run that
+    reaches it fails saying so).  With more walls only the single walls and the sets
+    earlier runs of the scene reached are built in."""
+    static = [w for w in range(len(system.scene.walls)) if system.has_contact_mode(w)]
+    if len(static) > SWEEP_CONTACT_WALLS:
+        return
+    for size in range(2, len(static) + 1):
+        for mode in itertools.combinations(static, size):
+            try:
+                system.add_c_mode(mode)
+            except SymmechError:
+                continue
 
 
 def _expressions(scene: Scene, given: Mapping[str, Any] | None) -> dict[str, sp.Expr]:
@@ -225,6 +249,7 @@ def sweep(
         )
     opts, loop = _loop(run, t_end, INFO_HEAD + 2 * n)
     system = system_for(scene, "c", strategy, definitions)
+    build_contact_sets(system)
     fns = Functions(system, {p: 1.0 for p in pnames})
     lib = library(system)
     plan = Plan(
