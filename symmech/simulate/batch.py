@@ -47,8 +47,8 @@ from symmech.simulate.options import RunOptions
 from symmech.simulate.parameters import check_parameters
 from symmech.simulate.protocol import INFO, INFO_HEAD, slot
 from symmech.simulate.result import EVENT_KINDS, STATUSES
-from symmech.simulate.run import system_for
-from symmech.simulate.system import FREE, SimulationError
+from symmech.simulate.run import system_for, velocity_in_D
+from symmech.simulate.system import SimulationError
 
 __all__ = ["BatchResult", "simulate_batch"]
 
@@ -221,14 +221,6 @@ def _check_rows(
                 f"Q0 row {row} is on the wrong side of wall {fns.wall_names[w]!r}:"
                 f" psi = {float(psi.reshape(-1)[row])!r} < 0"
             )
-    if not fns.constrained:
-        return
-    for i in range(Q.shape[0]):
-        res = fns.residual(FREE, t0, Q[i], V[i])
-        allowed = 100 * (atol + rtol * float(np.max(np.abs(V[i]), initial=0.0)))
-        if res > allowed:
-            raise SimulationError(
-                f"V0 row {i} is not in the constraint distribution D: |mu v0| = {res:.3g} >"
-                f" {allowed:.3g}; give a velocity that satisfies the constraints"
-            )
-        V[i] = fns.project(FREE, t0, Q[i], V[i])
+    if fns.constrained:
+        for i in range(Q.shape[0]):
+            V[i] = velocity_in_D(fns, t0, Q[i], V[i], rtol, atol, f"V0 row {i}")

@@ -30,7 +30,11 @@ Walls whose impact also imposes impulsive constraints (rolling on contact) or fo
 energy law have no such direction; a set that holds one is resolved one wall at a time.
 
 Every function here runs on Python floats and on mpmath numbers alike (the reference loop
-of :mod:`symmech.simulate.reference` uses the same law at 50 digits).
+of :mod:`symmech.simulate.reference` uses the same law at 50 digits), and the C loop
+tries the active sets in the same order, so the three loops take the same decisions.  That
+is why the loop does not call :func:`symmech.algebra.lcp.solve_lcp` (NumPy only, Murty's
+pivoting beyond 4 contacts), the general solver, which the tests use as an independent
+route.
 """
 
 from __future__ import annotations

@@ -122,14 +122,23 @@ def initial_state(fns: Functions, opts: RunOptions, q: np.ndarray, v: np.ndarray
             raise SimulationError(
                 f"q0 is on the wrong side of wall {fns.wall_names[w]!r}: psi = {psi!r} < 0"
             )
-    y0 = np.concatenate([q, v])
-    if fns.constrained:
-        res = fns.residual(FREE, t0, q, v)
-        allowed = 100 * (opts.atol + opts.rtol * float(np.max(np.abs(v), initial=0.0)))
-        if res > allowed:
-            raise SimulationError(
-                f"v0 is not in the constraint distribution D: |mu v0| = {res:.3g} >"
-                f" {allowed:.3g}; give a velocity that satisfies the constraints"
-            )
-        y0[fns.n :] = fns.project(FREE, t0, q, v)
-    return y0
+    return np.concatenate([q, velocity_in_D(fns, t0, q, v, opts.rtol, opts.atol, "v0")])
+
+
+def velocity_in_D(
+    fns: Functions, t0: float, q: np.ndarray, v: np.ndarray, rtol: float, atol: float, what: str
+) -> np.ndarray:
+    """``v`` in the constraint distribution D: a residual ``|mu v|`` within
+    ``100 (atol + rtol |v|)`` is projected away with P (Carnot paper section 2.2), a larger
+    one is refused naming ``what``; ``v`` itself for an unconstrained scene.  The one rule
+    of ``simulate`` and of each row of ``simulate_batch``."""
+    if not fns.constrained:
+        return v
+    res = fns.residual(FREE, t0, q, v)
+    allowed = 100 * (atol + rtol * float(np.max(np.abs(v), initial=0.0)))
+    if res > allowed:
+        raise SimulationError(
+            f"{what} is not in the constraint distribution D: |mu v0| = {res:.3g} >"
+            f" {allowed:.3g}; give a velocity that satisfies the constraints"
+        )
+    return fns.project(FREE, t0, q, v)
