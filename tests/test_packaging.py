@@ -32,6 +32,7 @@ LAYERS = [
     "examples",
     "codegen",
     "simulate",
+    "gait",
     "sweep",
     "references",
     "verify",

@@ -125,13 +125,15 @@ def generate(
     projectors: bool = False,
     jacobian: bool = False,
     cse: bool = True,
+    extra: Mapping | None = None,
 ) -> GeneratedCode:
     """Generate ``target`` (``"c"`` or ``"numpy"``) code for ``scene``.
 
     See :func:`symmech.codegen.plan.build_plan` for ``strategy``, ``functions``,
     ``constants`` (parameters baked in and folded), ``definitions`` (expressions for
-    arbitrary functions of time), ``projectors`` and ``jacobian``.  ``cse=False`` prints
-    the expressions without common-subexpression elimination (for comparisons).
+    arbitrary functions of time), ``projectors``, ``jacobian`` and ``extra`` (functions of
+    the state given as expressions, called with ``module.call(name, y, params=...)``).
+    ``cse=False`` prints the expressions without common-subexpression elimination (for comparisons).
     """
     if target not in BACKENDS:
         raise CodegenError(f"target must be one of {sorted(BACKENDS)}, got {target!r}")
@@ -144,6 +146,7 @@ def generate(
         definitions=definitions,
         projectors=projectors,
         jacobian=jacobian,
+        extra=extra,
     )
     plan = _with_metric_checks(scene, plan, constants, definitions)
     rules = _parameter_rules(scene, plan)

@@ -37,6 +37,7 @@ example 4.4) and their derivatives become run-time *inputs* ``u`` (see
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -52,6 +53,8 @@ from symmech.codegen.blocks import (
     BATCH_SUFFIX,
     Block,
     CodegenError,
+    matrix_block,
+    vector_block,
     wall_function_name,
     wall_ids,
 )
@@ -325,6 +328,43 @@ def _check_constants(scene: Scene, constants: Mapping) -> dict[sp.Symbol, sp.Exp
     return out
 
 
+#: Prefixes an extra function's name may not start with (the per-wall kinds).
+_WALL_PREFIXES = ("psi_", "dpsi_", "psit_", "impact_")
+
+
+def extra_functions(extra: Mapping[str, tuple[str, Any]]) -> tuple[tuple[str, str, sp.Matrix], ...]:
+    """``extra`` of :func:`build_plan` checked: ``(name, doc, matrix)`` per function.
+
+    A name is a lower-case identifier (``[a-z][a-z0-9_]*``), not a kind of
+    :data:`FUNCTIONS` and not starting with a wall prefix (names stay prefix-free, see the
+    module docstring); the expression a non-empty vector or matrix of sympy expressions
+    whose entries the scene's fields could hold (:mod:`symmech.declaration.admissible`).
+    The symbols are checked against the scene's state and parameters when the function is
+    added."""
+    if not isinstance(extra, Mapping):
+        raise CodegenError(f"extra: expected a mapping {{name: (doc, expression)}}, got {extra!r}")
+    out = []
+    for name, item in extra.items():
+        if not isinstance(name, str) or not re.fullmatch(r"[a-z][a-z0-9_]{0,62}", name):
+            raise CodegenError(f"extra: the name {name!r} is not a lower-case identifier")
+        if name in FUNCTIONS or name.startswith(_WALL_PREFIXES) or name.endswith(BATCH_SUFFIX):
+            raise CodegenError(f"extra: the name {name!r} is taken by a generated kind")
+        if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str)):
+            raise CodegenError(f"extra[{name!r}]: expected (doc, expression), got {item!r}")
+        doc, value = item
+        try:
+            expr = sp.Matrix(value)
+        except (TypeError, ValueError, sp.SympifyError):
+            raise CodegenError(f"extra[{name!r}]: not a vector or matrix of expressions") from None
+        if expr.rows == 0 or expr.cols == 0:
+            raise CodegenError(f"extra[{name!r}]: empty")
+        problems = sorted({p for e in expr for p in expression_problems(e)})
+        if problems:
+            raise CodegenError(f"extra[{name!r}]: {'; '.join(problems)}")
+        out.append((name, doc, expr))
+    return tuple(out)
+
+
 def build_plan(
     scene: Scene,
     *,
@@ -334,6 +374,7 @@ def build_plan(
     definitions: Mapping | None = None,
     projectors: bool = False,
     jacobian: bool = False,
+    extra: Mapping[str, tuple[str, Any]] | None = None,
 ) -> ScenePlan:
     """The :class:`ScenePlan` of ``scene`` (see the module docstring).
 
@@ -356,6 +397,10 @@ def build_plan(
     ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
     t and the parameters.  ``projectors`` adds P and Q (constrained scenes); ``jacobian``
     adds the Jacobian d(rhs)/dy of the first-order system (for implicit integrators).
+    ``extra`` adds functions of the scene's state y = (q, v), t and the parameters that
+    are not derived by the scene itself: ``{name: (doc, expression)}`` with a vector or a
+    matrix of sympy expressions (the reset maps of :mod:`symmech.gait` and their
+    Jacobians), evaluated as written, with CSE; see :func:`extra_functions`.
     """
     if strategy not in STRATEGIES:
         raise CodegenError(f"strategy must be one of {STRATEGIES}, got {strategy!r}")
@@ -375,7 +420,7 @@ def build_plan(
         wanted.add("jacobian")
     elif functions is None:
         wanted.discard("jacobian")
-    options = (wanted, constants or {}, definitions or {})
+    options = (wanted, constants or {}, definitions or {}, extra_functions(extra or {}))
     if strategy == "linear_solve" or (strategy == "auto" and scene.n > limits.CLOSED_FORM_MAX_N):
         return _build(scene, "linear_solve", *options)
     try:
@@ -399,6 +444,7 @@ def _build(
     wanted: set[str],
     constants: Mapping,
     definitions: Mapping,
+    extra: tuple[tuple[str, str, sp.Matrix], ...] = (),
     fallback: str | None = None,
 ) -> ScenePlan:
     """The plan with a concrete strategy (``closed_form`` or ``linear_solve``)."""
@@ -507,6 +553,17 @@ def _build(
     for w, wid in zip(scene.walls, ids, strict=True):
         for wall_builder in WALL_BUILDERS:
             wall_builder(ctx, w, wid)
+    for name, doc, expr in extra:
+        vector = expr.cols == 1
+        add(
+            name,
+            "extra",
+            doc,
+            doc,
+            ("y",),
+            [vector_block("out", expr) if vector else matrix_block("out", expr)],
+            (expr.rows,) if vector else (expr.rows, expr.cols),
+        )
     if not scene.walls:
         omitted.append("psi, dpsi, impact maps: the scene has no walls")
     if ctx.closed:
