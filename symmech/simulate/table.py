@@ -14,20 +14,21 @@ row's time.  Its ``attrs`` hold the status, message, statistics and parameters.
 :func:`save` writes that table with everything else a result holds, by the file's suffix:
 
 * ``.csv``: a first line ``# symmech-result {JSON}`` (status, message, statistics,
-  parameters, names, events), then the table (floats written shortest-round-trip, read
-  back with ``float_precision="round_trip"``: the same bits);
+  parameters, names, events), then the table (floats written as ``repr``, the shortest
+  text that reads back to the same bits; ``pandas.read_csv(path, comment="#")`` reads it);
 * ``.parquet``: the table, the same JSON in the schema's metadata under ``symmech-result``;
 * ``.npz``: the arrays as they are, the JSON as the string array ``meta``.
 
 :func:`load_result` reads any of them back into a :class:`SimulationResult` whose steps,
 events, status, message, statistics and parameters equal the saved run's (it has no
 continuous output: the interpolants of the steps are not stored).  Every file goes through
-:func:`symmech.files.write_atomic`.  pandas (CSV, frames) and pyarrow (Parquet) are
-optional dependencies (``pip install 'symmech[plot]'``).
+:func:`symmech.files.write_atomic`.  pandas (frames) and pyarrow (Parquet) are optional
+dependencies (``pip install 'symmech[plot]'``); CSV and NPZ need neither.
 """
 
 from __future__ import annotations
 
+import csv
 import io
 import json
 import os
@@ -261,22 +262,32 @@ def save(res: SimulationResult, path: str | os.PathLike[str]) -> Path:
     meta = json.dumps(_meta(res))
     cols = _columns(res)
     if suffix == ".npz":
-        arrays = {k: np.asarray(v) for k, v in cols.items() if k not in ("event", "wall")}
-        return write_atomic(path, lambda fh: np.savez(fh, **arrays, meta=np.array(meta)))
-    pd = _needs("pandas", f"writing {suffix}")
-    frame = pd.DataFrame(cols)
+        arrays: dict[str, Any] = {
+            k: np.asarray(v) for k, v in cols.items() if k not in ("event", "wall")
+        }
+        arrays["meta"] = np.array(meta)
+        return write_atomic(path, lambda fh: np.savez(fh, **arrays))
     if suffix == ".csv":
-
-        def csv(fh: Any) -> None:
-            fh.write(f"# {META_KEY} {meta}\n".encode())
-            fh.write(frame.to_csv(index=False, lineterminator="\n").encode())
-
-        return write_atomic(path, csv)
+        return write_atomic(path, lambda fh: fh.write(_csv_text(meta, cols).encode()))
     pa = _needs("pyarrow", "writing .parquet")
     pq = _needs("pyarrow.parquet", "writing .parquet")
-    table = pa.Table.from_pandas(frame, preserve_index=False)
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), META_KEY: meta})
+    table = pa.table({k: pa.array(v) for k, v in cols.items()})
+    table = table.replace_schema_metadata({META_KEY: meta})
     return write_atomic(path, lambda fh: pq.write_table(table, fh))
+
+
+def _csv_text(meta: str, cols: dict[str, Any]) -> str:
+    """The CSV file: the JSON line, the header, the rows (floats as ``repr``: the shortest
+    text that reads back to the same float)."""
+    out = io.StringIO()
+    out.write(f"# {META_KEY} {meta}\n")
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(cols)
+    columns = [
+        [repr(float(x)) for x in c] if isinstance(c, np.ndarray) else list(c) for c in cols.values()
+    ]
+    writer.writerows(zip(*columns, strict=True))
+    return out.getvalue()
 
 
 def load_result(path: str | os.PathLike[str]) -> SimulationResult:
@@ -298,28 +309,27 @@ def _read(path: str | os.PathLike[str], suffix: str) -> tuple[dict, dict[str, np
         with np.load(path, allow_pickle=False) as data:
             cols = {k: data[k] for k in data.files if k != "meta"}
             return json.loads(str(data["meta"])), cols
-    pd = _needs("pandas", f"reading {suffix}")
     if suffix == ".csv":
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8", newline="") as fh:
             first = fh.readline()
             prefix = f"# {META_KEY} "
             if not first.startswith(prefix):
                 raise ValueError(f"its first line does not start with {prefix.strip()!r}")
-            frame = pd.read_csv(
-                io.StringIO(fh.read()),
-                float_precision="round_trip",
-                keep_default_na=False,
-                dtype={"event": str, "wall": str},
-            )
-        meta = json.loads(first[len(prefix) :])
-    else:
-        pq = _needs("pyarrow.parquet", "reading .parquet")
-        table = pq.read_table(path)
-        raw = (table.schema.metadata or {}).get(META_KEY.encode())
-        if raw is None:
-            raise ValueError(f"no {META_KEY!r} metadata")
-        meta, frame = json.loads(raw), table.to_pandas()
-    return meta, {k: frame[k].to_numpy() for k in frame.columns}
+            rows = list(csv.reader(fh))
+        header, body = rows[0], rows[1:]
+        text = {"event", "wall", "side"}
+        cols = {
+            name: np.array([row[j] for row in body], dtype=object if name in text else float)
+            for j, name in enumerate(header)
+        }
+        return json.loads(first[len(prefix) :]), cols
+    pq = _needs("pyarrow.parquet", "reading .parquet")
+    table = pq.read_table(path)
+    raw = (table.schema.metadata or {}).get(META_KEY.encode())
+    if raw is None:
+        raise ValueError(f"no {META_KEY!r} metadata")
+    cols = {k: table.column(k).to_numpy(zero_copy_only=False) for k in table.column_names}
+    return json.loads(raw), cols
 
 
 def _result(meta: dict, cols: dict[str, np.ndarray]) -> SimulationResult:
