@@ -110,11 +110,13 @@ class Scene:
     name:
         A name for messages and generated code.
     drawing:
-        How the scene is drawn in plots and animations: a
-        :class:`~symmech.declaration.drawing.Drawing` (shapes placed by expressions in q, t
-        and the parameters), or None.
+        How the scene is drawn in animations, or None: a drawing
+        (:class:`~symmech.declaration.drawing.Drawing`) of shapes placed by expressions in
+        q, t and the parameters.
 
-    Example (a disk rolling on a line, Carnot paper example 3.7 with a permanent constraint):
+    Examples
+    --------
+    A disk rolling on a line (Carnot paper example 3.7 with a permanent constraint):
 
     >>> import sympy as sp, symmech as sm
     >>> x, y, th = sm.coordinates("x y theta")

@@ -1,10 +1,10 @@
 """The ``symmech simulate`` command.
 
-``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...]
-[--define NAME=EXPR ...] [--impact-law LAW]``
-    Run the scene (a built-in name or a scene file) with :func:`symmech.simulate` and print
-    its status, statistics, events and final state.  A built-in scene with a simulation
-    case (:mod:`symmech.bench.cases`) needs no state; otherwise ``--q0``, ``--v0`` and
+``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...] ...``
+    (and ``[--define NAME=EXPR ...] [--impact-law LAW]``, the files below).  Run the scene
+    (a built-in name or a scene file) with :func:`symmech.simulate` and print its status,
+    statistics, events and final state.  A built-in scene with a simulation case
+    (:mod:`symmech.bench.cases`) needs no state; otherwise ``--q0``, ``--v0`` and
     ``--t-end`` are required.  Parameters default to the scene file's values.  ``--define``
     gives a function of time of the scene (a run-time input, a moving wall's position) an
     expression in t and the parameters for the run (parsed safely: ``definitions=``).  The
