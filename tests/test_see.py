@@ -260,3 +260,19 @@ def test_simulate_refuses_an_unknown_file_type_before_running(tmp_path: Path):
     proc = symmech("simulate", "bouncing_ball", "--animate", "run.mp4", cwd=tmp_path)
     assert_one_line_error(proc, "--animate run.mp4: unknown file type '.mp4'", ".gif, .html")
     assert "status:" not in proc.stdout
+
+
+def test_a_batch_of_runs_is_a_table_that_reloads_equal(ball, tmp_path: Path):
+    import pandas as pd
+
+    batch = sm.simulate_batch(ball, [[1.0], [2.0]], [[0.0], [0.0]], 1.0, params=PARAMS)
+    frame = batch.to_frame(["y"])
+    assert list(frame.columns[:3]) == ["t", "y", "y_dot"]
+    for i, h in enumerate((1.0, 2.0)):  # the final states are the closed form's
+        exact = bouncing_ball_state(h, G, ALPHA, 1.0)
+        np.testing.assert_allclose(frame.loc[i, ["y", "y_dot"]], exact, atol=1e-7)
+    assert list(frame["impact"]) == [len(bouncing_ball_times(h, G, ALPHA, 1.0)) for h in (1, 2)]
+    path = batch.save(tmp_path / "batch.parquet", coordinates=["y"])
+    pd.testing.assert_frame_equal(pd.read_parquet(path), frame)
+    csv = batch.save(tmp_path / "batch.csv", coordinates=["y"])
+    pd.testing.assert_frame_equal(pd.read_csv(csv, index_col=0), frame, check_dtype=False)

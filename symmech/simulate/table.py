@@ -32,6 +32,7 @@ import csv
 import io
 import json
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -45,18 +46,23 @@ from symmech.simulate.system import SimulationError
 
 __all__ = [
     "FORMATS",
+    "FRAME_FORMATS",
     "META_KEY",
     "Samples",
+    "batch_frame",
     "events_frame",
     "load_result",
     "observables",
     "sample",
     "save",
+    "save_frame",
     "to_frame",
 ]
 
 #: File suffixes :func:`save` writes and :func:`load_result` reads.
 FORMATS = (".csv", ".parquet", ".npz")
+#: File suffixes :func:`save_frame` writes (a table of many runs: a batch, a sweep).
+FRAME_FORMATS = (".csv", ".parquet")
 #: The key of the JSON that holds all but the table (CSV first line, Parquet metadata).
 META_KEY = "symmech-result"
 _VERSION = 1
@@ -288,6 +294,48 @@ def _csv_text(meta: str, cols: dict[str, Any]) -> str:
     ]
     writer.writerows(zip(*columns, strict=True))
     return out.getvalue()
+
+
+def batch_frame(
+    batch: Any, coordinates: Sequence[str] | None = None, velocities: Sequence[str] | None = None
+) -> Any:
+    """A :class:`~symmech.simulate.batch.BatchResult` as a pandas DataFrame, one row per run
+    (index ``run``): the final ``t``, coordinates and velocities (named ``q0, q1, ...`` and
+    ``q0_dot, ...`` unless given), ``status``, ``message``, a count per event kind,
+    ``accumulation_time`` and ``steps``."""
+    pd = _needs("pandas", "to_frame")
+    n = batch.q.shape[1]
+    coordinates = list(coordinates or [f"q{i}" for i in range(n)])
+    velocities = list(velocities or [f"{c}_dot" for c in coordinates])
+    if len(coordinates) != n or len(velocities) != n:
+        raise SimulationError(f"to_frame: expected {n} coordinate and velocity names")
+    cols: dict[str, Any] = {"t": batch.t}
+    cols.update({c: batch.q[:, i] for i, c in enumerate(coordinates)})
+    cols.update({c: batch.v[:, i] for i, c in enumerate(velocities)})
+    cols["status"] = list(batch.statuses)
+    cols["message"] = list(batch.messages)
+    cols.update({kind: batch.events[:, k] for k, kind in enumerate(batch.event_kinds)})
+    cols["accumulation_time"] = batch.accumulation_time
+    cols["steps"] = batch.steps
+    frame = pd.DataFrame(cols)
+    frame.index.name = "run"
+    return frame
+
+
+def save_frame(frame: Any, path: str | os.PathLike[str]) -> Path:
+    """Write a table of runs (:func:`batch_frame`, a sweep's DataFrame) as CSV or Parquet
+    by the suffix, through :func:`symmech.files.write_atomic`; ``pandas.read_csv(path,
+    index_col=0)`` or ``pandas.read_parquet(path)`` reads it back."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in FRAME_FORMATS:
+        raise SimulationError(
+            f"save {os.fspath(path)!r}: unknown file type {suffix or '(none)'!r}; expected one"
+            f" of {', '.join(FRAME_FORMATS)}"
+        )
+    if suffix == ".csv":
+        return write_atomic(path, lambda fh: fh.write(frame.to_csv().encode()))
+    _needs("pyarrow", "writing .parquet")
+    return write_atomic(path, lambda fh: frame.to_parquet(fh))
 
 
 def load_result(path: str | os.PathLike[str]) -> SimulationResult:
