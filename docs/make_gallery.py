@@ -7,8 +7,9 @@ gallery page that shows them.
 Each built-in scene with a simulation case (:data:`symmech.bench.cases.CASES`) runs its
 case; the others run the state given in :data:`EXTRA` below.  The GIFs go to
 ``docs/_static/gallery/NAME.gif`` (20 frames a second, 60 dpi: small files), the page to
-``docs/gallery.md``.  Both are committed: the documentation build shows them without
-simulating (rerun this script when a scene or the drawing code changes).
+``docs/gallery.md``, the plots of :data:`PLOTS` to ``docs/_static/NAME_plot.png``.  All are
+committed: the documentation build shows them without simulating (rerun this script when a
+scene or the drawing code changes).
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ HERE = Path(__file__).resolve().parent
 OUT = HERE / "_static" / "gallery"
 PAGE = HERE / "gallery.md"
 FPS, DPI = 20.0, 60.0
+#: Scenes whose plot (``res.plot()``) is also written, as ``docs/_static/NAME_plot.png``.
+PLOTS = ("ellipse_gravity",)
 
 #: Scenes without a simulation case: (q0, v0, t_end, what the animation shows).
 EXTRA: dict[str, tuple[list[float], list[float], float, str]] = {
@@ -75,6 +78,8 @@ def main(names: list[str]) -> None:
             warnings.simplefilter("ignore", sm.SymmechWarning)  # rolling_ball: no drawing
             anim = res.animate(fps=FPS)
         path = save_animation(anim, OUT / f"{name}.gif", fps=FPS, dpi=DPI)
+        if name in PLOTS:
+            res.plot(path=HERE / "_static" / f"{name}_plot.png")
         print(
             f"{path.relative_to(HERE)}: {len(anim.times)} frames, {res.status},"
             f" {len(res.events)} events, {time.perf_counter() - clock:.1f} s"
