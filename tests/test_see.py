@@ -276,3 +276,21 @@ def test_a_batch_of_runs_is_a_table_that_reloads_equal(ball, tmp_path: Path):
     pd.testing.assert_frame_equal(pd.read_parquet(path), frame)
     csv = batch.save(tmp_path / "batch.csv", coordinates=["y"])
     pd.testing.assert_frame_equal(pd.read_csv(csv, index_col=0), frame, check_dtype=False)
+
+
+def test_animating_a_scene_without_drawing_says_so_and_writes_an_html_player(tmp_path: Path):
+    from test_cli import symmech
+
+    scene = tmp_path / "drop.toml"
+    scene.write_text(
+        'coordinates = ["y"]\nmetric = ["m"]\npotential = "m*g*y"\n'
+        '[parameters]\nm = 1\ng = 9.81\n[[walls]]\npsi = "y"\nrestitution = 1\n',
+        encoding="utf-8",
+    )
+    args = ["--q0", "2", "--v0", "0", "--t-end", "0.3", "--fps", "10", "--quiet"]
+    proc = symmech("simulate", str(scene), *args, "--animate", "drop.html", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "symmech: warning: scene 'drop' has no drawing" in proc.stderr
+    page = (tmp_path / "drop.html").read_text(encoding="utf-8")
+    assert page.startswith("<!DOCTYPE html>") and "<title>drop</title>" in page
+    assert page.count("data:image/png;base64") == 4  # t = 0, 0.1, 0.2, 0.3: four frames

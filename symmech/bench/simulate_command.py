@@ -20,6 +20,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,7 @@ import numpy as np
 
 from symmech.bench.cases import CASES
 from symmech.bench.commands import print_line
+from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError, SymmechWarning
 from symmech.simulate.arguments import numbers, parameter_values
 from symmech.simulate.hybrid import MAX_STEPS
@@ -146,8 +148,8 @@ def write_files(args: argparse.Namespace, res: Any, say: Callable) -> None:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", SymmechWarning)
             anim = res.animate(fps=args.fps, speed=args.speed)
-        for w in caught:
-            say(str(w.message))
+        for w in caught:  # said even with --quiet: the animation is not what was asked
+            print(f"symmech: warning: {terminal(str(w.message))}", file=sys.stderr)
         _print(f"animation: {save_animation(anim, args.animate, fps=args.fps)}")
 
 

@@ -20,6 +20,7 @@ page through :func:`symmech.files.write_atomic`.
 
 from __future__ import annotations
 
+import html
 import io
 import os
 import warnings
@@ -61,8 +62,9 @@ def frame_times(res: SimulationResult, fps: float, speed: float) -> np.ndarray:
         raise SimulationError(f"animate: fps and speed must be positive, got {fps!r}, {speed!r}")
     t0, t1 = float(res.t[0]), float(res.t[-1])
     steps = int(np.floor((t1 - t0) * fps / speed + 1e-9))
-    grid = t0 + np.arange(steps + 1) * (speed / fps)
-    times = np.union1d(grid[grid <= t1], [float(e.time) for e in res.events])
+    # the last frame may land past t1 by a rounding (0.1 * 3 > 0.3): it is t1's
+    grid = np.minimum(t0 + np.arange(steps + 1) * (speed / fps), t1)
+    times = np.union1d(grid, [float(e.time) for e in res.events])
     if times.size > MAX_FRAMES:
         raise SimulationError(
             f"animate: {times.size} frames (limit {MAX_FRAMES}); play faster (speed > {speed:g})"
@@ -303,7 +305,13 @@ def save_animation(
         )
     if suffix == ".html":
         with style():
-            return write_text_atomic(path, str(anim.to_jshtml(fps=fps)))
+            player = str(anim.to_jshtml(fps=fps))
+        title = html.escape(Path(path).stem)
+        page = (
+            f'<!DOCTYPE html>\n<html>\n<head>\n<meta charset="utf-8">\n<title>{title}</title>\n'
+            f"</head>\n<body>\n{player}\n</body>\n</html>\n"
+        )
+        return write_text_atomic(path, page)
     try:
         from PIL import Image
     except ImportError as exc:
