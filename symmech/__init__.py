@@ -11,7 +11,7 @@ impact laws in closed form.
 -r
 """
 
-from symmech.declaration import shapes
+from symmech.declaration import drawing, shapes
 from symmech.declaration.expressions import parse_expression
 from symmech.declaration.symbols import coordinates, t, velocities
 from symmech.declaration.wall import Wall
@@ -74,6 +74,7 @@ __all__ = [
     "bracket_rank",
     "codegen",
     "coordinates",
+    "drawing",
     "dump_scene",
     "hat",
     "is_involutive",

@@ -10,11 +10,13 @@ one-line description.
 
 from __future__ import annotations
 
+import itertools
 import numbers
 from collections.abc import Callable
 
 import sympy as sp
 
+from symmech.declaration.drawing import Disc, Drawing, Point, Segment
 from symmech.declaration.symbols import coordinates, t, velocities
 from symmech.declaration.wall import Wall
 from symmech.errors import SceneError
@@ -192,7 +194,16 @@ def pendulum_on_cart(n: int) -> Scene:
         kinetic.append(sp.Mul(half, m[i + 1], sp.Add(sp.Add(*vx) ** 2, sp.Add(*vy) ** 2)))
         potential.append(sp.Mul(m[i + 1], g, sp.Add(*height)))
     T, V = sp.Add(*kinetic), sp.Add(*potential)
-    return Scene(q, kinetic_energy=T, potential=V, name=f"pendulum_on_cart_{n}")
+    joints = [(q[0], sp.S.Zero)]  # the cart, then each link's mass
+    for i in range(n):
+        x0, y0 = joints[-1]
+        joints.append((x0 + l[i] * sp.sin(q[i + 1]), y0 - l[i] * sp.cos(q[i + 1])))
+    drawing = Drawing(
+        [Disc(joints[0], sp.Rational(1, 5))]
+        + [Segment(a, b) for a, b in itertools.pairwise(joints)]
+        + [Point(p) for p in joints[1:]]
+    )
+    return Scene(q, kinetic_energy=T, potential=V, name=f"pendulum_on_cart_{n}", drawing=drawing)
 
 
 # ------------------------------------------------------------------ stress scenes
@@ -267,7 +278,14 @@ def newtons_cradle(balls: int = 3) -> Scene:
     walls = [
         Wall(xs[i + 1] - xs[i] - 2 * r, restitution=1, name=f"contact{i}") for i in range(balls - 1)
     ]
-    return Scene(xs, metric=sp.eye(balls) * m, walls=walls, name=f"newtons_cradle_{balls}")
+    drawing = Drawing([Disc((x, 0), r) for x in xs])
+    return Scene(
+        xs,
+        metric=sp.eye(balls) * m,
+        walls=walls,
+        name=f"newtons_cradle_{balls}",
+        drawing=drawing,
+    )
 
 
 EXAMPLES: dict[str, tuple[Callable[[], Scene], str]] = {

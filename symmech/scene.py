@@ -20,6 +20,7 @@ import sympy as sp
 from symmech.algebra.simplification import Level, check_level, tidy_matrix
 from symmech.constraints.dynamics import constrained_solution, constraint_rate
 from symmech.constraints.projectors import gradients, gram, projectors, solve_spd
+from symmech.declaration.drawing import Drawing
 from symmech.declaration.latex import latex_text
 from symmech.declaration.spec import Declaration, ResolvedWall, declare
 from symmech.declaration.wall import Wall
@@ -108,8 +109,14 @@ class Scene:
         The parameter symbols, in order.  Default: every other free symbol, sorted by name.
     name:
         A name for messages and generated code.
+    drawing:
+        How the scene is drawn in animations, or None: a drawing
+        (:class:`~symmech.declaration.drawing.Drawing`) of shapes placed by expressions in
+        q, t and the parameters.
 
-    Example (a disk rolling on a line, Carnot paper example 3.7 with a permanent constraint):
+    Examples
+    --------
+    A disk rolling on a line (Carnot paper example 3.7 with a permanent constraint):
 
     >>> import sympy as sp, symmech as sm
     >>> x, y, th = sm.coordinates("x y theta")
@@ -141,6 +148,7 @@ class Scene:
         walls: Iterable[Wall] = (),
         parameters: Sequence[sp.Symbol] | None = None,
         name: str | None = None,
+        drawing: Any = None,
     ):
         decl = declare(
             coordinates,
@@ -154,6 +162,7 @@ class Scene:
             walls=walls,
             parameters=parameters,
             name=name,
+            drawing=drawing,
         )
         object.__setattr__(self, "_decl", decl)
         object.__setattr__(self, "_Scene__derived", {})
@@ -254,6 +263,11 @@ class Scene:
     @property
     def walls(self) -> tuple[ResolvedWall, ...]:
         return self._decl.walls
+
+    @property
+    def drawing(self) -> Drawing | None:
+        """How the scene is drawn (:mod:`symmech.declaration.drawing`), or None."""
+        return self._decl.drawing
 
     @property
     def n(self) -> int:

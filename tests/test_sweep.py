@@ -290,7 +290,7 @@ def test_progress_bar_on_request_only(capsys):
     assert capsys.readouterr().err == ""  # not a terminal: no bar
     sm.sweep(bouncing_ball(), grid, 1.0, v0=[0.0], params=BALL, chunk=1, progress=True)
     err = capsys.readouterr().err
-    assert "sweep [" in err and "3/3 runs" in err and err.endswith("\n")
+    assert "sweep: 100%" in err and "3/3" in err and "run/s" in err and err.endswith("\n")
 
 
 def test_import_symmech_loads_neither_pandas_nor_dask():

@@ -1,27 +1,36 @@
 """The ``symmech simulate`` command.
 
-``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...]
-[--define NAME=EXPR ...] [--impact-law LAW]``
-    Run the scene (a built-in name or a scene file) with :func:`symmech.simulate` and print
-    its status, statistics, events and final state.  A built-in scene with a simulation
-    case (:mod:`symmech.bench.cases`) needs no state; otherwise ``--q0``, ``--v0`` and
+``symmech simulate SCENE [--q0 ...] [--v0 ...] [--t-end T] [--param NAME=VALUE ...] ...``
+    (and ``[--define NAME=EXPR ...] [--impact-law LAW]``, the files below).  Run the scene
+    (a built-in name or a scene file) with :func:`symmech.simulate` and print its status,
+    statistics, events and final state.  A built-in scene with a simulation case
+    (:mod:`symmech.bench.cases`) needs no state; otherwise ``--q0``, ``--v0`` and
     ``--t-end`` are required.  Parameters default to the scene file's values.  ``--define``
     gives a function of time of the scene (a run-time input, a moving wall's position) an
     expression in t and the parameters for the run (parsed safely: ``definitions=``).  The
     run options are those of :class:`symmech.simulate.options.RunOptions`.
+
+    Files (:func:`add_file_options`): ``--out run.csv`` (or ``.parquet``, ``.npz``) saves the
+    run (:meth:`~symmech.simulate.result.SimulationResult.save`), ``--plot run.png`` its plot
+    (:func:`symmech.simulate.plotting.plot`), ``--animate run.gif`` (or ``.html``) its
+    animation at real time times ``--speed``, ``--fps`` frames a second
+    (:mod:`symmech.simulate.animation`).  Each path written is printed.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from symmech.bench.cases import CASES
 from symmech.bench.commands import print_line
-from symmech.errors import SymmechError
+from symmech.codegen.escape import terminal
+from symmech.errors import SymmechError, SymmechWarning
 from symmech.simulate.arguments import numbers, parameter_values
 from symmech.simulate.hybrid import MAX_STEPS
 from symmech.simulate.options import CONTACT_MODES, IMPACT_LAWS
@@ -76,6 +85,72 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
         choices=IMPACT_LAWS,
         help="walls struck at one instant: together (default) or one at a time",
     )
+    add_file_options(sim)
+
+
+def _positive(text: str) -> float:
+    """A positive finite number for argparse."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def add_file_options(parser: argparse.ArgumentParser) -> None:
+    """``--out``, ``--plot``, ``--animate``, ``--speed``, ``--fps`` (module docstring)."""
+    files = parser.add_argument_group("files")
+    files.add_argument("--out", metavar="FILE", help="save the run: .csv, .parquet or .npz")
+    files.add_argument("--plot", metavar="FILE", help="plot the run: .png, .svg or .pdf")
+    files.add_argument("--animate", metavar="FILE", help="animate the run: .gif or .html")
+    files.add_argument(
+        "--speed", type=_positive, default=1.0, help="animation speed (1: real time)"
+    )
+    files.add_argument("--fps", type=_positive, default=25.0, help="animation frames a second")
+
+
+def check_file_options(args: argparse.Namespace) -> None:
+    """Refuse an unknown file type before the run (a long run is not lost to a typo)."""
+    from symmech.simulate.animation import ANIMATION_FORMATS
+    from symmech.simulate.plotting import IMAGE_FORMATS
+    from symmech.simulate.table import FORMATS
+
+    for option, path, kinds in (
+        ("--out", args.out, FORMATS),
+        ("--plot", args.plot, IMAGE_FORMATS),
+        ("--animate", args.animate, ANIMATION_FORMATS),
+    ):
+        if path and Path(path).suffix.lower() not in kinds:
+            raise SymmechError(
+                f"{option} {path}: unknown file type {Path(path).suffix or '(none)'!r};"
+                f" expected one of {', '.join(kinds)}"
+            )
+
+
+def write_files(args: argparse.Namespace, res: Any, say: Callable) -> None:
+    """Write the files that ``--out``, ``--plot`` and ``--animate`` ask for."""
+    if args.out:
+        say(f"saving the run to {args.out}")
+        _print(f"saved: {res.save(args.out)}")
+    if args.plot:
+        say(f"plotting to {args.plot}")
+        from symmech.simulate.plotting import save_figure
+
+        _print(f"plot: {save_figure(res.plot(), args.plot)}")
+    if args.animate:
+        import warnings
+
+        from symmech.simulate.animation import save_animation
+
+        say(f"animating to {args.animate} (speed {args.speed:g}, {args.fps:g} frames/s)")
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", SymmechWarning)
+            anim = res.animate(fps=args.fps, speed=args.speed)
+        for w in caught:  # said even with --quiet: the animation is not what was asked
+            print(f"symmech: warning: {terminal(str(w.message))}", file=sys.stderr)
+        _print(f"animation: {save_animation(anim, args.animate, fps=args.fps)}")
 
 
 def run_command(args: argparse.Namespace, load: Callable[[str], Any], say: Callable) -> int:
@@ -87,6 +162,7 @@ def run_command(args: argparse.Namespace, load: Callable[[str], Any], say: Calla
 def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callable) -> int:
     import symmech.simulate as simulate_pkg
 
+    check_file_options(args)
     sf = load(args.scene)
     scene = sf.scene
     params = {str(k): float(v) for k, v in sf.defaults.items()}
@@ -138,4 +214,5 @@ def _simulate(args: argparse.Namespace, load: Callable[[str], Any], say: Callabl
         _print(f"t = {float(res.t[-1])!r}")
         _print(f"q = {np.asarray(res.q[-1], dtype=float)}")
         _print(f"v = {np.asarray(res.v[-1], dtype=float)}")
+    write_files(args, res, say)
     return 0 if res.success else 1

@@ -16,7 +16,6 @@ draws error against run time on log-log axes (matplotlib, the ``plot`` extra).
 from __future__ import annotations
 
 import math
-import os
 import statistics
 import time
 from collections.abc import Sequence
@@ -28,7 +27,6 @@ import numpy as np
 import symmech.simulate as simulate_pkg
 from symmech.bench.baseline import baseline_run, prepare
 from symmech.bench.cases import Case, bouncing_ball_state, bouncing_ball_times
-from symmech.files import write_atomic
 from symmech.simulate.reference import as_float, reference_run
 
 __all__ = ["Reference", "Row", "format_table", "measure", "plot", "reference", "rows"]
@@ -226,13 +224,11 @@ def format_table(case: Case, ref: Reference, table: Sequence[Row]) -> str:
 
 def plot(case: Case, table: Sequence[Row], path: str) -> None:
     """Final-state error against median run time, log-log, one curve per route and method;
-    failed runs (infinite error) are drawn at the top of the axes with a cross."""
-    import matplotlib
+    failed runs (infinite error) are drawn at the top of the axes with a cross.  In the look
+    of every symmech figure (:func:`symmech.simulate.plotting.new_figure`)."""
+    from symmech.simulate.plotting import new_figure, save_figure, style
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 5))
+    fig, ax = new_figure(width=7, height=5)
     finite = [r.final_error for r in table if math.isfinite(r.final_error) and r.final_error > 0]
     top = max(finite, default=1.0) * 10
     for key in dict.fromkeys((r.route, r.method) for r in table):
@@ -247,15 +243,8 @@ def plot(case: Case, table: Sequence[Row], path: str) -> None:
     ax.set_xlabel("median run time [s]")
     ax.set_ylabel("final-state error (max abs)")
     ax.set_title(f"work-precision: {case.name} (red x: failed or stopped)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
+    with style():
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
     # through the one writer of output files: a link at ``path`` is replaced, not followed
-    write_atomic(path, lambda fh: fig.savefig(fh, format=_image_format(path), dpi=120))
-    plt.close(fig)
-
-
-def _image_format(path: str) -> str:
-    """The image format of ``path``'s suffix (PNG when it names none)."""
-    suffix = os.path.splitext(str(path))[1].lower().lstrip(".")
-    return suffix or "png"
+    save_figure(fig, path)

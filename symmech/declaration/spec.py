@@ -81,6 +81,7 @@ from symmech.declaration.checks import (
     metric_of_kinetic_energy,
     short,
 )
+from symmech.declaration.drawing import Drawing, check_drawing
 from symmech.declaration.dynamic import dynamic_translation
 from symmech.declaration.expressions import to_expression
 from symmech.declaration.forces import forces_field
@@ -175,6 +176,8 @@ class Declaration:
     #: positive definite only for some values of parameters declared without a sign:
     #: generated code checks it at run time (its Cholesky factorisation of g)
     metric_checked_at_run_time: bool = False
+    #: how the scene is drawn (:mod:`symmech.declaration.drawing`), or None
+    drawing: Drawing | None = None
 
     @property
     def n(self) -> int:
@@ -204,6 +207,7 @@ class Declaration:
             "walls": [w.as_wall() for w in self.walls],
             "parameters": self.parameters,
             "name": self.name,
+            "drawing": self.drawing,
         }
 
     def expressions(self) -> list[sp.Expr]:
@@ -244,6 +248,7 @@ def declare(
     walls: Iterable[Wall] = (),
     parameters: Sequence[sp.Symbol] | None = None,
     name: str | None = None,
+    drawing: object = None,
 ) -> Declaration:
     """Validate a scene's inputs and return its :class:`Declaration`.
 
@@ -405,6 +410,12 @@ def declare(
     with about("parameters"):
         params = explicit if explicit is not None else rules.default_parameters(problems)
 
+    with about("drawing"):
+        drawing_problems: list[str] = []
+        drawn = check_drawing(drawing, [*q, *params, TIME], drawing_problems)
+        for message in drawing_problems:
+            problems.add(message)
+
     # -- stage 3: properties -------------------------------------------------------------------
     points = Points([*q, *params, TIME])
     if frame_field is not None and frame_field.ok:
@@ -508,4 +519,5 @@ def declare(
         kinetic_energy_given=T is not None,
         assumed_positive=assumed or (),
         metric_checked_at_run_time=assumed is not None,
+        drawing=drawn,
     )

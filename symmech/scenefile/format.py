@@ -57,6 +57,7 @@ _TOP_KEYS = (
     "inputs",
     "frame",
     "walls",
+    "drawing",
 )
 _PARAMETER_KEYS = ("value", "sign", "description")
 _FUNCTION_KEYS = ("expression", "arguments", "real", "description")

@@ -33,6 +33,7 @@ from symmech.scenefile.format import (
     _toml_type,
 )
 from symmech.scenefile.loaded import SceneFile
+from symmech.scenefile.reader_drawing import read_drawing
 from symmech.scenefile.reader_names import _NamesLoader
 
 
@@ -289,6 +290,7 @@ class _Loader(_NamesLoader):
         self.field_lines["constraints"] = cline
         constraints = self.constraint_list(data.get("constraints", []), n, "constraints", cline)
         walls = self.walls(n)
+        drawing = read_drawing(self)
         unused = [p.name for p in params if p not in self.used]
         if unused and not self.problems.items:
             # (an expression refused above may be where a parameter is used)
@@ -312,6 +314,7 @@ class _Loader(_NamesLoader):
                 walls=walls,
                 parameters=params,
                 name=name,
+                drawing=drawing,
             )
         except SceneError as exc:
             for problem in exc.records:

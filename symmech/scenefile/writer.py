@@ -12,6 +12,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.printing.str import StrPrinter
 
+from symmech.declaration.drawing import SHAPES, Drawing
 from symmech.declaration.expressions import (
     parse_expression,
     to_expression,
@@ -337,9 +338,39 @@ def dump_scene(
                 _toml_value(c, f"{label}.velocity[{j}]", table) for j, c in enumerate(w.velocity)
             ]
             lines.append("velocity = [" + ", ".join(comps) + "]")
+    if decl.drawing is not None:
+        lines.extend(_drawing_toml(decl.drawing, table))
     text = "\n".join(lines) + "\n"
     _check_readable(text, decl.expressions())
     return text
+
+
+def _drawing_toml(drawing: Drawing, table: Mapping[str, sp.Expr]) -> list[str]:
+    """The ``[[drawing]]`` tables of ``drawing`` (:mod:`symmech.scenefile.reader_drawing`)."""
+    lines = []
+    kinds = {cls: kind for kind, cls in SHAPES.items()}
+    for k, shape in enumerate(drawing):
+        kind = kinds[type(shape)]
+        fields: dict[str, Any] = {
+            "point": lambda s: {"at": s.at},
+            "segment": lambda s: {"start": s.start, "end": s.end},
+            "disc": lambda s: {"center": s.center, "radius": s.radius, "angle": s.angle},
+            "ellipse": lambda s: {"center": s.center, "axes": (s.a, s.b), "angle": s.angle},
+            "wall": lambda s: {"point": s.point, "normal": s.normal},
+        }[kind](shape)
+        lines += ["", "[[drawing]]", f"shape = {_toml_string(kind)}"]
+        for key, value in fields.items():
+            where = f"drawing[{k}].{key}"
+            if value is None:
+                continue
+            if isinstance(value, tuple):
+                items = ", ".join(
+                    _toml_value(e, f"{where}[{j}]", table) for j, e in enumerate(value)
+                )
+                lines.append(f"{key} = [{items}]")
+            else:
+                lines.append(f"{key} = {_toml_value(value, where, table)}")
+    return lines
 
 
 def _check_readable(text: str, exprs: Sequence[sp.Expr]) -> None:

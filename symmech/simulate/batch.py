@@ -20,10 +20,11 @@ on the number of threads.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -91,6 +92,21 @@ class BatchResult:
     def impacts(self) -> np.ndarray:
         """Impacts per run, shape (N,)."""
         return self.events[:, 0]
+
+    def to_frame(
+        self, coordinates: Sequence[str] | None = None, velocities: Sequence[str] | None = None
+    ) -> Any:
+        """One row per run as a pandas DataFrame (:func:`symmech.simulate.table.batch_frame`)."""
+        from symmech.simulate.table import batch_frame
+
+        return batch_frame(self, coordinates, velocities)
+
+    def save(self, path: str | os.PathLike[str], **names: Any) -> Path:
+        """Write :meth:`to_frame` (``names``: its arguments) as CSV or Parquet by the suffix
+        (:func:`symmech.simulate.table.save_frame`)."""
+        from symmech.simulate.table import save_frame
+
+        return save_frame(self.to_frame(**names), path)
 
 
 def simulate_batch(

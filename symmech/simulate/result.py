@@ -8,17 +8,28 @@ of :class:`Event` records, the status (``"finished"``, ``"zeno"``, ``"max_events
 step containing t, or, where a method has none (rk4, and on the C backend DOP853 steps whose
 dense stages were never made), the cubic Hermite interpolant through the step ends.  At an
 event time the value after the event is returned.
+
+Out of the result (:mod:`.table`, :mod:`.plotting`, :mod:`.animation`): ``res.sample(ts)``
+(the dense output at chosen times, each event's instant twice: before and after),
+``res.to_frame()`` / ``res.events_frame()`` (pandas), ``res.save(path)`` (CSV, Parquet or
+NPZ; :func:`~symmech.simulate.table.load_result` reads it back), ``res.plot()`` and
+``res.animate()`` (matplotlib).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+import os
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, overload
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, overload
 
 import numpy as np
 
 from symmech.simulate.protocol import EVENT_KINDS, RUN_STATES
+
+if TYPE_CHECKING:
+    from symmech.simulate.table import Samples
 
 __all__ = ["STATUSES", "Event", "EventTable", "SimulationResult"]
 
@@ -134,9 +145,80 @@ class SimulationResult:
     segments: Sequence[tuple[float, float, Interpolant]] = field(default=(), repr=False)
     n: int = 0
     accumulation_time: float | None = None
+    #: The parameter values of the run, by name.
+    params: dict[str, float] = field(default_factory=dict)
+    #: Names of the coordinates, of the velocities (or quasi-velocities) and of the walls.
+    coordinates: tuple[str, ...] = ()
+    velocities: tuple[str, ...] = ()
+    wall_names: tuple[str, ...] = ()
+    #: The scene simulated (None for a result read from a file).
+    scene: Any = field(default=None, repr=False, compare=False)
+    #: The compiled functions at the run's parameters (energy, gaps), or None.
+    functions: Any = field(default=None, repr=False, compare=False)
+    #: Columns read from a file beside the states (``energy``, ``gap[wall]``), at ``t``.
+    stored: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self._starts: np.ndarray | None = None
+        if not self.coordinates:
+            self.coordinates = tuple(f"q{i}" for i in range(self.n))
+        if not self.velocities:
+            self.velocities = tuple(f"{c}_dot" for c in self.coordinates)
+
+    def attach(self, scene: Any, params: Mapping[str, float], functions: Any) -> None:
+        """Record what the run was made from (:func:`symmech.simulate.simulate` calls it):
+        the scene, its parameter values and the compiled functions (for energy and gaps)."""
+        self.scene, self.functions = scene, functions
+        self.params = {str(k): float(v) for k, v in params.items()}
+        self.coordinates = tuple(str(c) for c in scene.coordinates)
+        self.velocities = tuple(str(v) for v in scene.velocities)
+        self.wall_names = tuple(functions.wall_names)
+
+    def sample(self, ts: Sequence[float] | np.ndarray, *, events: bool = True) -> Samples:
+        """The states at times ``ts`` from the continuous output, with each event inside
+        ``[min(ts), max(ts)]`` at its exact time twice: the state before it and after it
+        (:func:`symmech.simulate.table.sample`)."""
+        from symmech.simulate.table import sample
+
+        return sample(self, ts, events=events)
+
+    def to_frame(self, ts: Sequence[float] | np.ndarray | None = None) -> Any:
+        """The run as a pandas DataFrame, one row per accepted step (or per time of
+        :meth:`sample` when ``ts`` is given): ``t``, the coordinates, the velocities,
+        ``energy``, a ``gap[wall]`` per wall, and ``event``/``wall`` on the rows at an
+        event (:func:`symmech.simulate.table.to_frame`)."""
+        from symmech.simulate.table import to_frame
+
+        return to_frame(self, ts)
+
+    def events_frame(self) -> Any:
+        """The events as a pandas DataFrame, one row per event
+        (:func:`symmech.simulate.table.events_frame`)."""
+        from symmech.simulate.table import events_frame
+
+        return events_frame(self)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the run to ``path``: ``.csv``, ``.parquet`` or ``.npz`` by its suffix, with
+        its events, status, message, statistics and parameters
+        (:func:`symmech.simulate.table.save`; read back with ``load_result``)."""
+        from symmech.simulate.table import save
+
+        return save(self, path)
+
+    def plot(self, **options: Any) -> Any:
+        """Coordinates, velocities, gaps and energy against time, events marked by kind
+        (:func:`symmech.simulate.plotting.plot`); returns the matplotlib Figure."""
+        from symmech.simulate.plotting import plot
+
+        return plot(self, **options)
+
+    def animate(self, **options: Any) -> Any:
+        """The run drawn as the scene's drawing says, as a matplotlib animation
+        (:func:`symmech.simulate.animation.animate`)."""
+        from symmech.simulate.animation import animate
+
+        return animate(self, **options)
 
     @property
     def y(self) -> np.ndarray:
@@ -157,7 +239,10 @@ class SimulationResult:
         (len(t), 2n)."""
         ts = np.asarray(t, dtype=float)
         if not self.segments:
-            raise ValueError("this result holds no continuous output")
+            raise ValueError(
+                "this result holds no continuous output (a result read from a file keeps"
+                " only its accepted steps)"
+            )
         lo, hi = self.segments[0][0], self.segments[-1][1]
         if not np.all((ts >= lo) & (ts <= hi)):  # NaN included
             raise ValueError(f"t outside the simulated interval [{lo!r}, {hi!r}]")

@@ -108,7 +108,9 @@ def simulate(
     system = system_for(scene, engine.target, strategy, definitions, jacobian=implicit)
     fns = Functions(system, values)
     y0 = initial_state(fns, opts, q, v)
-    return engine.run(system, fns, values, y0, tend, opts)
+    result = engine.run(system, fns, values, y0, tend, opts)
+    result.attach(scene, values, fns)
+    return result
 
 
 def initial_state(fns: Functions, opts: RunOptions, q: np.ndarray, v: np.ndarray) -> np.ndarray:

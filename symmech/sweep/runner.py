@@ -18,9 +18,7 @@ long the sweep.
 
 from __future__ import annotations
 
-import math
 import sys
-import time
 from collections.abc import Callable, Iterable
 from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 from typing import Any, TextIO
@@ -36,7 +34,8 @@ Sink = Callable[[int, Any], None]  # (chunk index, its Arrow table)
 
 
 class Progress:
-    """A one-line progress bar on ``stream`` (stderr): runs done, rate, time left.
+    """A progress bar on ``stream`` (stderr): runs done, rate, time left (tqdm, the
+    ``sweep`` extra; without tqdm, no bar).
 
     ``enabled=None`` shows it only when the stream is a terminal and the sweep has run for
     more than ``delay`` seconds (a short sweep prints nothing)."""
@@ -47,40 +46,32 @@ class Progress:
         self.stream = stream if stream is not None else sys.stderr
         tty = bool(getattr(self.stream, "isatty", lambda: False)())
         self.enabled = tty if enabled is None else bool(enabled)
-        self.delay = 0.0 if enabled else delay
         self.total = total
-        self.done = 0
-        self.start = time.perf_counter()
-        self._last = -math.inf
-        self._shown = False
+        self._bar: Any = None
+        if self.enabled:
+            try:
+                from tqdm import tqdm
+            except ImportError:  # the bar is a convenience: the sweep runs without it
+                return
+            self._bar = tqdm(
+                total=total,
+                file=self.stream,
+                desc="sweep",
+                unit="run",
+                delay=0.0 if enabled else delay,
+                mininterval=0.2,
+                dynamic_ncols=tty,
+            )
 
     def update(self, runs: int) -> None:
-        """Count ``runs`` more finished runs and redraw (at most 5 times a second)."""
-        self.done += runs
-        now = time.perf_counter()
-        elapsed = now - self.start
-        if not self.enabled or elapsed < self.delay:
-            return
-        if now - self._last < 0.2 and self.done < self.total:
-            return
-        self._last = now
-        rate = self.done / elapsed if elapsed > 0 else 0.0
-        left = (self.total - self.done) / rate if rate > 0 else math.inf
-        width = 30
-        filled = int(width * self.done / max(self.total, 1))
-        bar = "#" * filled + "." * (width - filled)
-        eta = f"{left:.0f} s left" if math.isfinite(left) else ""
-        self.stream.write(
-            f"\rsweep [{bar}] {self.done}/{self.total} runs, {rate:.0f} runs/s {eta}   "
-        )
-        self.stream.flush()
-        self._shown = True
+        """Count ``runs`` more finished runs (tqdm redraws at most 5 times a second)."""
+        if self._bar is not None:
+            self._bar.update(runs)
 
     def close(self) -> None:
         """End the bar's line (if it was drawn)."""
-        if self._shown:
-            self.stream.write("\n")
-            self.stream.flush()
+        if self._bar is not None:
+            self._bar.close()
 
 
 def run_local(
