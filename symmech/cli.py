@@ -30,6 +30,9 @@ Commands:
     (:mod:`symmech.bench.commands`).
 ``symmech sweep SCENE --grid FILE --out FILE``
     Run the scene for every row of a grid (:mod:`symmech.sweep.command`).
+``symmech gait NAME [--routes ...] [--continue P=A:B]``
+    A built-in gait's fixed point and multipliers by each route, or their continuation in
+    a parameter (:mod:`symmech.gait.command`).
 
 SCENE is a scene file (TOML, :mod:`symmech.scenefile`) or the name of a built-in scene.
 With no command, ``show`` runs on the bouncing ellipse.  Progress (stage and elapsed time)
@@ -67,6 +70,8 @@ from symmech.derivation import MAX_DETAILED_N, Derivation, derivation
 from symmech.errors import SceneError, SymmechError
 from symmech.examples import EXAMPLES, example
 from symmech.files import write_text_atomic
+from symmech.gait.command import add_command as add_gait_command
+from symmech.gait.command import run_gait_command
 from symmech.scenefile import (
     SceneFile,
     builtin_scene_names,
@@ -262,6 +267,7 @@ def _parser() -> argparse.ArgumentParser:
     add_simulate_command(sub, common)
     add_commands(sub, common)
     add_sweep_command(sub, common)
+    add_gait_command(sub, common)
 
     export = sub.add_parser("export", parents=[common], help="write a scene as a TOML file")
     export.add_argument("scene", nargs="?", default=DEFAULT_SCENE, help="scene file or name")
@@ -296,6 +302,8 @@ def _run(args: argparse.Namespace, progress: _Progress) -> int:
         return run_command(args, resolve_scene, progress)
     if command == "sweep":
         return run_sweep_command(args, resolve_scene, progress)
+    if command == "gait":
+        return run_gait_command(args, progress)
     spec = getattr(args, "scene", DEFAULT_SCENE)
     if command == "derive":
         targets = args.emit or ["c"]

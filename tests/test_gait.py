@@ -27,7 +27,7 @@ from symmech.gait import (
     impact_reset,
     stride,
 )
-from symmech.gait.models import compass_gait, rimless_wheel
+from symmech.gait.models import compass_gait, rimless_wheel, simplest_walker_limit
 from symmech.gait.periodic import difference_jacobian, fixed_point, multipliers
 
 WHEEL = dict(m=1.0, r=0.3, l=1.0, g=9.81, alpha=math.pi / 10, gamma=0.1)
@@ -142,3 +142,51 @@ def test_an_impact_that_gains_energy_is_refused():
     scene = sm.Scene(q, metric=sp.eye(5), walls=[wall], name="gainer")
     with pytest.raises(SceneError, match="gains energy"):
         impact_reset(scene, scene, "w", {s: s for s in q}, list(q))
+
+
+@pytest.fixture(scope="module")
+def walker() -> Gait:
+    return simplest_walker_limit()
+
+
+def test_simplest_walker_limit_is_garcias_model(walker):
+    """Garcia et al. (1998), eqs. 3-5 with theta = theta1 and phi = theta1 - theta2:
+    theta'' = sin(theta - gamma), phi'' = theta'' + theta'^2 sin(phi) - cos(theta -
+    gamma) sin(phi); heel strike theta+ = -theta-, phi+ = -2 theta-, theta'+ =
+    cos(2 theta-) theta'-, phi'+ = cos(2 theta-)(1 - cos(2 theta-)) theta'-."""
+    mode = walker.modes["stance"]
+    t1, t2 = mode.coordinates
+    d1 = mode.velocities[0]
+    (gamma,) = [p for p in walker.parameters if p.name == "gamma"]
+    acc = sp.Matrix(mode.acceleration())
+    theta, phi, theta_d = t1, t1 - t2, d1
+    theta_dd = sp.sin(theta - gamma)
+    phi_dd = theta_dd + theta_d**2 * sp.sin(phi) - sp.cos(theta - gamma) * sp.sin(phi)
+    assert sp.simplify(acc[0] - theta_dd) == 0
+    assert sp.simplify((acc[0] - acc[1]) - phi_dd) == 0
+    reset = walker.transitions[0].reset
+    at_strike = {t2: -t1}  # phi = 2 theta
+    q_plus = reset.position.subs(at_strike)
+    v_plus = reset.velocity.subs(at_strike)
+    c = sp.cos(2 * t1)
+    assert sp.simplify(q_plus[0] - (-t1)) == 0  # theta+ = -theta-
+    assert sp.simplify((q_plus[0] - q_plus[1]) - (-2 * t1)) == 0  # phi+ = -2 theta-
+    assert sp.simplify(v_plus[0] - c * d1) == 0
+    assert sp.simplify((v_plus[0] - v_plus[1]) - c * (1 - c) * d1) == 0
+
+
+def test_simplest_walker_fixed_point_equals_garcias_published_gait(walker):
+    """gamma = 0.009, long-period gait: theta* = 0.20031090049483, theta'* =
+    -0.19983247291764 (Garcia et al. 1998, given to 1e-10)."""
+    from symmech.gait.models import GAITS
+
+    fns = CompiledGait(walker, {"gamma": 0.009})
+    fp = fixed_point(fns, 0, GAITS["simplest_walker"].guess)
+    assert abs(fp.x[0] - 0.20031090049483) <= 1e-10
+    assert abs(fp.x[2] - -0.19983247291764) <= 1e-10
+    big = fp.multipliers[:2]
+    assert all(abs(m) < 1 for m in big) and abs(big[0].imag) > 0.5
+    # central differences in float64 agree with the variational-saltation route to the
+    # accuracy differences can have (h = 1e-6: about 1e-9 of error from O(h^2) and rounding)
+    fd = difference_jacobian(fns, 0, fp.x, 1e-6)
+    assert np.max(np.abs(fd - fp.DP)) <= 1e-7

@@ -27,6 +27,10 @@ the papers).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
 import sympy as sp
 
 from symmech.declaration.symbols import coordinates, velocities
@@ -34,7 +38,14 @@ from symmech.declaration.wall import Wall
 from symmech.gait.modes import Gait, Reset, Transition, impact_reset, pinned_scene
 from symmech.scene import Scene
 
-__all__ = ["compass_gait", "rimless_wheel", "simplest_walker", "simplest_walker_limit"]
+__all__ = [
+    "GAITS",
+    "GaitCase",
+    "compass_gait",
+    "rimless_wheel",
+    "simplest_walker",
+    "simplest_walker_limit",
+]
 
 
 def _leg(theta: sp.Expr, length: sp.Expr) -> sp.Matrix:
@@ -191,3 +202,60 @@ def _limit(e: sp.Expr, beta: sp.Symbol) -> sp.Expr:
     if den.subs(beta, 0) != 0:
         return sp.simplify(e.subs(beta, 0))
     return sp.simplify(sp.limit(e, beta, 0))
+
+
+@dataclass(frozen=True)
+class GaitCase:
+    """A built-in gait: its builder, default parameters, a start for Newton (the state
+    just after the section transition, near the published gait), and the parameter a
+    continuation follows by default."""
+
+    name: str
+    build: Callable[[], Gait]
+    parameters: Mapping[str, float]
+    guess: tuple[float, ...]
+    description: str
+    continue_in: str = "gamma"
+
+
+def _simplest_guess(theta: float = 0.2, theta_dot: float = -0.2) -> tuple[float, ...]:
+    """Just after heel strike from Garcia's (theta, theta'): theta2 = -theta1 and
+    theta2' = theta' - phi' with phi' = cos(2 theta)(1 - cos(2 theta)) theta'-."""
+    c = math.cos(2 * theta)
+    phi_dot = c * (1 - c) * theta_dot / c
+    return (theta, -theta, theta_dot, theta_dot - phi_dot)
+
+
+GAITS: dict[str, GaitCase] = {
+    case.name: case
+    for case in (
+        GaitCase(
+            "rimless_wheel",
+            rimless_wheel,
+            {"m": 1.0, "r": 0.3, "l": 1.0, "g": 9.81, "alpha": math.pi / 10, "gamma": 0.1},
+            (math.pi / 10, -1.5),
+            "McGeer's rimless wheel (closed-form fixed point and multiplier)",
+        ),
+        GaitCase(
+            "simplest_walker",
+            simplest_walker_limit,
+            {"gamma": 0.009},
+            _simplest_guess(),
+            "Garcia et al.'s simplest walker (feet of vanishing mass, declared exactly)",
+        ),
+        GaitCase(
+            "simplest_walker_feet",
+            simplest_walker,
+            {"beta": 1e-3, "gamma": 0.009},
+            _simplest_guess(),
+            "the simplest walker with feet of mass beta (hip mass 1)",
+        ),
+        GaitCase(
+            "compass_gait",
+            compass_gait,
+            {"m": 5.0, "mH": 10.0, "a": 0.5, "b": 0.5, "g": 9.81, "gamma": 3 * math.pi / 180},
+            (0.27, -0.27, -1.09, -0.38),
+            "Goswami, Thuilot and Espiau's compass gait (stable gait at 3 degrees)",
+        ),
+    )
+}

@@ -81,7 +81,11 @@ def multipliers(DP: np.ndarray) -> list:
         values = [mpmath.mpc(v) for v in values]
     else:
         values = [complex(v) for v in np.linalg.eigvals(DP)]
-    return sorted(values, key=lambda z: (-abs(z), float(mpmath.arg(z)) if z != 0 else 0.0))
+    # conjugate pairs share a modulus up to rounding: compare moduli to 9 digits
+    return sorted(
+        values,
+        key=lambda z: (-float(f"{float(abs(z)):.9g}"), float(mpmath.arg(z)) if z != 0 else 0.0),
+    )
 
 
 def fixed_point(

@@ -1,0 +1,150 @@
+"""``symmech gait NAME``: a built-in gait's fixed point and multipliers by each route.
+
+``symmech gait NAME [--param k=v ...] [--routes c,numpy,fd,mp,mp-cd] [--digits 30]``
+prints the table of :func:`symmech.gait.report.solve_routes` (fixed point, multipliers,
+error against the mpmath reference, seconds) and the cost of the multipliers in C against
+one stride.  ``--continue gamma=a:b [--steps N] [--plot FILE]`` follows the gait from
+``a`` to ``b`` (natural continuation, :func:`symmech.gait.periodic.continuation`), prints
+each fixed point's multipliers and writes a PNG of their moduli and real parts (default
+``NAME_continuation.png``), with the parameter intervals where a multiplier crosses -1
+(period doubling) marked.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Callable
+from typing import Any
+
+from symmech.errors import SymmechError
+from symmech.gait.evaluation import CompiledGait
+from symmech.gait.models import GAITS, GaitCase
+from symmech.gait.periodic import continuation, period_doublings
+from symmech.gait.report import ROUTES, format_figures, solve_routes, stride_costs
+
+__all__ = ["add_command", "run_gait_command"]
+
+
+def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
+    """The ``gait`` sub-command's parser."""
+    p = sub.add_parser("gait", parents=[common], help="a gait's fixed point and multipliers")
+    p.add_argument("name", metavar="NAME", help=f"a built-in gait: {', '.join(GAITS)}")
+    p.add_argument("--param", action="append", default=[], metavar="K=V", help="set a parameter")
+    p.add_argument(
+        "--routes",
+        default="c,numpy,fd,mp,mp-cd",
+        help=f"comma-separated routes among {','.join(ROUTES)} (default: all)",
+    )
+    p.add_argument("--digits", type=int, default=30, help="digits of the mpmath routes")
+    p.add_argument(
+        "--continue", dest="continue_", metavar="P=A:B", help="follow the gait in P from A to B"
+    )
+    p.add_argument("--steps", type=int, default=11, help="parameter values of --continue")
+    p.add_argument("--plot", metavar="FILE", help="PNG of the continuation")
+
+
+def _case(name: str) -> GaitCase:
+    if name not in GAITS:
+        raise SymmechError(f"unknown gait {name!r}; built-in gaits: {', '.join(GAITS)}")
+    return GAITS[name]
+
+
+def _parameters(case: GaitCase, items: list[str]) -> dict[str, float]:
+    from symmech.simulate.arguments import number
+
+    values = dict(case.parameters)
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or key not in values:
+            raise SymmechError(f"--param {item!r}: expected K=V with K among {sorted(values)}")
+        values[key] = number(text, f"--param {key}")
+    return values
+
+
+def _range(text: str, case: GaitCase) -> tuple[str, float, float]:
+    from symmech.simulate.arguments import number
+
+    key, sep, rest = text.partition("=")
+    a, sep2, b = rest.partition(":")
+    if not sep or not sep2 or key not in case.parameters:
+        raise SymmechError(
+            f"--continue {text!r}: expected P=A:B with P among {sorted(case.parameters)}"
+        )
+    return key, number(a, "--continue A"), number(b, "--continue B")
+
+
+def run_gait_command(args: argparse.Namespace, progress: Callable[[str], None]) -> int:
+    """Run ``symmech gait`` (module docstring); returns the exit code."""
+    case = _case(args.name)
+    params = _parameters(case, args.param)
+    routes = [r.strip() for r in args.routes.split(",") if r.strip()]
+    if not 10 <= args.digits <= 60:
+        raise SymmechError(f"--digits {args.digits}: choose 10 to 60")
+    progress(f"deriving gait {case.name}")
+    gait = case.build()
+    if args.continue_:
+        return _continue(args, case, gait, params, progress)
+    progress(f"routes {', '.join(routes)}")
+    figures = solve_routes(gait, params, case.guess, routes, digits=args.digits)
+    print(f"gait {case.name}: {case.description}")
+    print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in params.items()))
+    print(format_figures(figures))
+    c = next((f for f in figures if f.route == "c"), None)
+    if c is not None:
+        plain, full = stride_costs(CompiledGait(gait, params), c.x)
+        print(
+            f"cost in C: one stride {plain * 1e3:.3f} ms, stride with its Jacobian"
+            f" {full * 1e3:.3f} ms ({full / plain:.2f}x)"
+        )
+    return 0
+
+
+def _continue(args, case: GaitCase, gait, params, progress) -> int:
+    key, a, b = _range(args.continue_, case)
+    n = max(2, int(args.steps))
+    values = [a + (b - a) * i / (n - 1) for i in range(n)]
+
+    def make(value: float) -> CompiledGait:
+        progress(f"{key} = {value:.6g}")
+        return CompiledGait(gait, {**params, key: value})
+
+    points = continuation(make, 0, values, case.guess)
+    for p in points:
+        if p.point is None:
+            print(f"{key} = {p.value:.6g}: no fixed point ({p.failure})")
+            continue
+        ms = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}i" for m in p.point.multipliers)
+        state = "stable" if p.point.stable else "unstable"
+        print(f"{key} = {p.value:.6g}: {state}, multipliers [{ms}]")
+    doublings = period_doublings(points)
+    for lo, hi in doublings:
+        print(f"period doubling between {key} = {lo:.6g} and {hi:.6g}")
+    path = args.plot or f"{case.name}_continuation.png"
+    _plot(points, key, doublings, path)
+    print(f"wrote {path}")
+    return 0
+
+
+def _plot(points, key: str, doublings, path: str) -> None:
+    """Moduli and real parts of the multipliers against the parameter, in the style of
+    every symmech figure (:mod:`symmech.simulate.plotting`)."""
+    from symmech.simulate.plotting import new_figure, save_figure
+
+    ok = [p for p in points if p.point is not None]
+    fig, (top, bottom) = new_figure(2, 1, height=6.0, sharex=True)
+    xs = [p.value for p in ok]
+    width = max((len(p.point.multipliers) for p in ok), default=0)
+    for i in range(width):
+        top.plot(xs, [abs(p.point.multipliers[i]) for p in ok], "o-", ms=3, label=f"{i + 1}")
+        bottom.plot(xs, [p.point.multipliers[i].real for p in ok], "o-", ms=3)
+    top.axhline(1.0, color="k", lw=0.8, ls="--")
+    bottom.axhline(-1.0, color="k", lw=0.8, ls="--")
+    for lo, hi in doublings:
+        for ax in (top, bottom):
+            ax.axvspan(lo, hi, color="tab:red", alpha=0.15)
+    top.set_ylabel("|multiplier|")
+    bottom.set_ylabel("Re multiplier")
+    bottom.set_xlabel(key)
+    top.legend(title="multiplier", fontsize="small")
+    top.set_title("multipliers of the stride map along the continuation")
+    save_figure(fig, path)
