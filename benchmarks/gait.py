@@ -67,7 +67,9 @@ def main(argv: list[str] | None = None) -> int:
         }
         print(f"== {name}: {case.description}")
         print(format_figures(list(figures.values())))
-        plain, full = stride_costs(CompiledGait(gait, case.parameters), figures["c"].x)
+        plain, full = stride_costs(
+            CompiledGait(gait, case.parameters), figures["c"].x, case.section
+        )
         c, fd = figures["c"], figures["fd"]
         line = (
             f"{name:16s} C vs mp {c.error:.2e}  mp-cd vs mp {figures['mp-cd'].error:.2e}"

@@ -190,3 +190,29 @@ def test_simplest_walker_fixed_point_equals_garcias_published_gait(walker):
     # accuracy differences can have (h = 1e-6: about 1e-9 of error from O(h^2) and rounding)
     fd = difference_jacobian(fns, 0, fp.x, 1e-6)
     assert np.max(np.abs(fd - fp.DP)) <= 1e-7
+
+
+def test_hopper_two_modes_of_different_sizes():
+    """Flight (body and foot, 4 states) and stance (body, 2 states): the stride from one
+    liftoff to the next crosses both transitions; its Jacobian (4 x 4, through a 2-state
+    mode) equals central differences, and the plastic touchdown leaves the body's
+    velocity unchanged (the metric is diagonal)."""
+    from symmech.gait.models import GAITS
+
+    case = GAITS["hopper"]
+    gait = case.build()
+    touchdown = gait.transition("touchdown").reset
+    y = gait.modes["flight"].coordinates[0]
+    yd = gait.modes["flight"].velocities[0]
+    assert touchdown.position == sp.ImmutableMatrix([y])
+    assert sp.simplify(touchdown.velocity[0] - yd) == 0
+    fns = CompiledGait(gait, case.parameters)
+    fp = fixed_point(fns, case.section, case.guess)
+    assert [k for k, _, _ in fp.stride.events] == [0, 1]
+    assert fp.x[1] == 0 and fp.x[3] == 0  # the foot leaves the ground at rest
+    assert fp.DP.shape == (4, 4)
+    fd = difference_jacobian(fns, case.section, fp.x, 1e-6)
+    assert np.max(np.abs(fd - fp.DP)) <= 1e-7 * max(1.0, np.max(np.abs(fp.DP)))
+    big = fp.multipliers[0]
+    assert abs(big) < 1 and abs(big.imag) < 1e-12
+    assert all(abs(m) <= 1e-10 for m in fp.multipliers[1:])

@@ -18,13 +18,15 @@ from symmech.gait.report import solve_routes
 pytestmark = pytest.mark.slow
 
 
-@pytest.mark.parametrize("name", ["simplest_walker", "compass_gait"])
+@pytest.mark.parametrize("name", ["simplest_walker", "compass_gait", "hopper"])
 def test_c_multipliers_equal_central_differences_at_mpmath_precision(name):
     case = GAITS[name]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         gait = case.build()
-    c, ref = solve_routes(gait, case.parameters, case.guess, ("c", "mp-cd"), digits=30)
+    c, ref = solve_routes(
+        gait, case.parameters, case.guess, ("c", "mp-cd"), digits=30, section=case.section
+    )
     assert ref.error is not None and c.error is not None
     assert c.error <= 1e-10
     assert max(abs(a - b) for a, b in zip(c.x, ref.x, strict=True)) <= 1e-10

@@ -85,13 +85,15 @@ def run_gait_command(args: argparse.Namespace, progress: Callable[[str], None]) 
     if args.continue_:
         return _continue(args, case, gait, params, progress)
     progress(f"routes {', '.join(routes)}")
-    figures = solve_routes(gait, params, case.guess, routes, digits=args.digits)
+    figures = solve_routes(
+        gait, params, case.guess, routes, digits=args.digits, section=case.section
+    )
     print(f"gait {case.name}: {case.description}")
     print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in params.items()))
     print(format_figures(figures))
     c = next((f for f in figures if f.route == "c"), None)
     if c is not None:
-        plain, full = stride_costs(CompiledGait(gait, params), c.x)
+        plain, full = stride_costs(CompiledGait(gait, params), c.x, case.section)
         print(
             f"cost in C: one stride {plain * 1e3:.3f} ms, stride with its Jacobian"
             f" {full * 1e3:.3f} ms ({full / plain:.2f}x)"
@@ -108,7 +110,7 @@ def _continue(args, case: GaitCase, gait, params, progress) -> int:
         progress(f"{key} = {value:.6g}")
         return CompiledGait(gait, {**params, key: value})
 
-    points = continuation(make, 0, values, case.guess)
+    points = continuation(make, case.section, values, case.guess)
     for p in points:
         if p.point is None:
             print(f"{key} = {p.value:.6g}: no fixed point ({p.failure})")

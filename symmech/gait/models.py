@@ -42,6 +42,7 @@ __all__ = [
     "GAITS",
     "GaitCase",
     "compass_gait",
+    "hopper",
     "rimless_wheel",
     "simplest_walker",
     "simplest_walker_limit",
@@ -204,6 +205,51 @@ def _limit(e: sp.Expr, beta: sp.Symbol) -> sp.Expr:
     return sp.simplify(sp.limit(e, beta, 0))
 
 
+def hopper() -> Gait:
+    """A vertical hopper with flight and stance modes: a body of mass ``m`` on a leg
+    spring (stiffness ``k``, rest length ``l``) to a foot of mass ``mf``.  Flight: body and
+    foot free, ``y`` and ``yf``.  Touchdown: the foot's wall ``yf >= 0``, a plastic impact
+    (the foot stops; the body's velocity is unchanged, the metric being diagonal), then the
+    stance mode in ``y`` alone, where an actuator in the leg pumps energy in with the
+    force ``pump y' - sat y'^3`` (a van der Pol oscillator's: energy in at low speed, out
+    at high speed, so the hop height settles).  Liftoff: the ground's force on the foot,
+    ``mf g - k (y - l) + pump y' - sat y'^3``, reaches 0; the foot leaves at rest (a
+    coordinate map, no impact).  The hopping gait is the fixed point of the map from one
+    liftoff to the next (touchdown, stance, liftoff)."""
+    y, yf = coordinates("y yf")
+    m, mf, k, l, pump, sat, g = sp.symbols("m mf k l pump sat g", positive=True)
+    flight = Scene(
+        [y, yf],
+        metric=sp.diag(m, mf),
+        potential=m * g * y + mf * g * yf + k * (y - yf - l) ** 2 / 2,
+        walls=[Wall(yf, restitution=0, name="touchdown")],
+        name="hopper_flight",
+    )
+    (ys,) = coordinates("y")
+    (ysd,) = velocities((ys,))
+    stance = Scene(
+        [ys],
+        metric=sp.Matrix([[m]]),
+        potential=m * g * ys + k * (ys - l) ** 2 / 2,
+        forces=[pump * ysd - sat * ysd**3],
+        walls=[Wall(mf * g - k * (ys - l), name="liftoff")],
+        name="hopper_stance",
+    )
+    touchdown = impact_reset(flight, flight, "touchdown", {y: y, yf: yf}, [y])
+    liftoff = Reset(
+        position=sp.ImmutableMatrix([ys, 0]),
+        velocity=sp.ImmutableMatrix([ysd, 0]),
+    )
+    return Gait(
+        "hopper",
+        {"flight": flight, "stance": stance},
+        (
+            Transition("flight", "stance", "touchdown", touchdown, name="touchdown"),
+            Transition("stance", "flight", "liftoff", liftoff, name="liftoff"),
+        ),
+    )
+
+
 @dataclass(frozen=True)
 class GaitCase:
     """A built-in gait: its builder, default parameters, a start for Newton (the state
@@ -216,6 +262,7 @@ class GaitCase:
     guess: tuple[float, ...]
     description: str
     continue_in: str = "gamma"
+    section: int = 0
 
 
 def _simplest_guess(theta: float = 0.2, theta_dot: float = -0.2) -> tuple[float, ...]:
@@ -256,6 +303,15 @@ GAITS: dict[str, GaitCase] = {
             {"m": 5.0, "mH": 10.0, "a": 0.5, "b": 0.5, "g": 9.81, "gamma": 3 * math.pi / 180},
             (0.27, -0.27, -1.09, -0.38),
             "Goswami, Thuilot and Espiau's compass gait (stable gait at 3 degrees)",
+        ),
+        GaitCase(
+            "hopper",
+            hopper,
+            {"m": 1.0, "mf": 0.1, "k": 200.0, "l": 1.0, "pump": 4.0, "sat": 1.0, "g": 9.81},
+            (1.004905, 0.0, 1.9, 0.0),
+            "a vertical hopper: flight (body and foot) and stance (body) modes",
+            continue_in="pump",
+            section=1,
         ),
     )
 }

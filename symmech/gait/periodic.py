@@ -112,7 +112,8 @@ def fixed_point(
         A = res.DP - fns.array(np.eye(len(x)))
         dx = _solve(A, -r)
         if residual <= tol:
-            return FixedPoint(x, res.DP, multipliers(res.DP), res.period, residual, it, res)
+            # P(x), within tol of x, lies exactly on the image of the section's reset
+            return FixedPoint(res.x, res.DP, multipliers(res.DP), res.period, residual, it, res)
         x = x + dx
     raise GaitError(
         f"fixed_point: Newton did not converge in {max_iterations} iterations"
