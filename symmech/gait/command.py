@@ -106,9 +106,11 @@ def _continue(args, case: GaitCase, gait, params, progress) -> int:
     n = max(2, int(args.steps))
     values = [a + (b - a) * i / (n - 1) for i in range(n)]
 
+    base = CompiledGait(gait, params)
+
     def make(value: float) -> CompiledGait:
         progress(f"{key} = {value:.6g}")
-        return CompiledGait(gait, {**params, key: value})
+        return base.with_parameters({**params, key: value})
 
     points = continuation(make, case.section, values, case.guess)
     for p in points:

@@ -134,6 +134,19 @@ class CompiledGait(GaitFunctions):
             self._p[mode] = np.array([self.values[p] for p in names]) if names else None
         self._calls: dict[tuple[str, str], Callable[[np.ndarray], np.ndarray]] = {}
 
+    def with_parameters(self, params: Mapping[str, float]) -> CompiledGait:
+        """The same generated code at other parameter values (nothing is generated or
+        compiled again: the parameters are run-time inputs of the modules)."""
+        other = object.__new__(CompiledGait)
+        other.__dict__.update(self.__dict__)
+        other.values = _parameter_values(self.gait, params)
+        other._p = {
+            mode: (np.array([other.values[p] for p in m.parameters]) if m.parameters else None)
+            for mode, m in self._modules.items()
+        }
+        other._calls = {}
+        return other
+
     def _fn(self, mode: str, name: str) -> Callable[[np.ndarray], np.ndarray]:
         key = (mode, name)
         fn = self._calls.get(key)

@@ -2,7 +2,8 @@
 
 A period-one gait is a fixed point ``x* = P(x*)`` of the stride map of
 :mod:`symmech.gait.stride`, found by Newton's method on ``P(x) - x`` with the Jacobian
-``DP`` of the variational-saltation route: ``x <- x - (DP - I)^-1 (P(x) - x)``.  Its
+``DP`` of the variational-saltation route: ``x <- x - (DP - I)^-1 (P(x) - x)``, damped (the step halved) while the stride from
+the new point fails or its residual more than doubles.  Its
 stability is decided by the eigenvalues of ``DP(x*)``, the multipliers of the return map
 (stable when all lie inside the unit circle).  ``DP`` has rank at most ``2n - 1``: the
 state after a transition lies on the reset's image of the guard, so at least one
@@ -104,16 +105,32 @@ def fixed_point(
     x = fns.array(list(x0))
     tol = 1e3 * fns.eps if tol is None else tol
     residual: Any = None
+    last: tuple[np.ndarray, np.ndarray, Any] | None = None  # (x, dx, residual) of the last step
     for it in range(1, max_iterations + 1):
-        res = stride(fns, section, x, variational=True, options=options)
+        try:
+            res = stride(fns, section, x, variational=True, options=options)
+            r = res.x - x
+            residual = _norm(r)
+            worse = last is not None and residual > 2 * last[2]
+        except GaitError:
+            if last is None:
+                raise
+            worse = True
+        if worse and last is not None:
+            # damped Newton: halve the last step while the stride fails or the residual grows
+            x_prev, dx, prev_res = last
+            dx = dx / 2
+            if _norm(dx) <= tol:
+                break
+            last = (x_prev, dx, prev_res)
+            x = x_prev + dx
+            continue
         assert res.DP is not None
-        r = res.x - x
-        residual = _norm(r)
-        A = res.DP - fns.array(np.eye(len(x)))
-        dx = _solve(A, -r)
         if residual <= tol:
             # P(x), within tol of x, lies exactly on the image of the section's reset
             return FixedPoint(res.x, res.DP, multipliers(res.DP), res.period, residual, it, res)
+        dx = _solve(res.DP - fns.array(np.eye(len(x))), -r)
+        last = (x, dx, residual)
         x = x + dx
     raise GaitError(
         f"fixed_point: Newton did not converge in {max_iterations} iterations"

@@ -1,0 +1,55 @@
+"""``symmech gait``: the table of routes, the continuation's PNG, refusals in one line."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+from tests.test_cli import assert_one_line_error, symmech
+
+
+def test_gait_prints_each_route_and_the_cost(tmp_path: Path):
+    proc = symmech("gait", "rimless_wheel", "--routes", "c,fd,mp", "--digits", "20", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    rows = {
+        line.split()[0]: line
+        for line in proc.stdout.splitlines()
+        if line[:3] in ("c  ", "fd ", "mp ")
+    }
+    assert set(rows) == {"c", "fd", "mp"}
+    # McGeer's multiplier eta^2 for the default wheel (r = 0.3, l = 1, alpha = pi/10)
+    eta = (0.09 + math.cos(math.pi / 5)) / 1.09
+    assert f"{eta**2:+.12f}"[:14] in rows["c"]
+    error_c = float(rows["c"].split()[2])
+    error_fd = float(rows["fd"].split()[2])
+    assert error_c <= 1e-13 and error_fd >= 1e3 * error_c
+    assert re.search(
+        r"cost in C: one stride [\d.]+ ms, stride with its Jacobian [\d.]+ ms", proc.stdout
+    )
+
+
+def test_gait_continuation_writes_a_png_and_finds_the_period_doubling(tmp_path: Path):
+    png = tmp_path / "walker.png"
+    proc = symmech(
+        "gait", "simplest_walker", "--continue", "gamma=0.009:0.017", "--steps", "5",
+        "--plot", str(png), cwd=tmp_path, timeout=300,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    assert "gamma = 0.013: stable" in proc.stdout, proc.stdout
+    assert "gamma = 0.017: unstable" in proc.stdout
+    assert "period doubling between gamma = 0.015 and 0.017" in proc.stdout
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_gait_refusals_are_one_line(tmp_path: Path):
+    assert_one_line_error(symmech("gait", "moonwalker", cwd=tmp_path), "unknown gait 'moonwalker'")
+    assert_one_line_error(
+        symmech("gait", "rimless_wheel", "--param", "g=9,81", cwd=tmp_path), "--param g"
+    )
+    assert_one_line_error(
+        symmech("gait", "rimless_wheel", "--routes", "c,evil", cwd=tmp_path), "unknown ['evil']"
+    )
+    assert_one_line_error(
+        symmech("gait", "rimless_wheel", "--continue", "zeta=0:1", cwd=tmp_path), "--continue"
+    )
