@@ -2,14 +2,14 @@
 
 A period-one gait is a fixed point ``x* = P(x*)`` of the stride map of
 :mod:`symmech.gait.stride`, found by Newton's method on ``P(x) - x`` with the Jacobian
-``DP`` of the variational-saltation route: ``x <- x - (DP - I)^-1 (P(x) - x)``, damped (the step halved) while the stride from
-the new point fails or its residual more than doubles.  Its
-stability is decided by the eigenvalues of ``DP(x*)``, the multipliers of the return map
-(stable when all lie inside the unit circle).  ``DP`` has rank at most ``2n - 1``: the
-state after a transition lies on the reset's image of the guard, so at least one
-multiplier is 0; :func:`multipliers` returns them sorted by decreasing modulus, the
-trivial zeros last (the monodromy matrix ``Xi Phi`` has the same spectrum with 1 for 0,
-the flow's direction).
+``DP`` of the variational-saltation route: ``x <- x - (DP - I)^-1 (P(x) - x)``, damped
+(the step halved) while the stride from the new point fails or its residual more than
+doubles.  Its stability is decided by the eigenvalues of ``DP(x*)``, the multipliers of
+the return map (stable when all lie inside the unit circle).  ``DP`` has rank at most
+``2n - 1``: the state after a transition lies on the reset's image of the guard, so at
+least one multiplier is 0; :func:`multipliers` returns them sorted by decreasing modulus,
+the trivial zeros last (the monodromy matrix ``Xi Phi`` has the same spectrum with 1 for
+0, the flow's direction).
 
 The Jacobian can also be taken by differences of ``P`` (:func:`difference_jacobian`):
 forward differences in float64 give about half the digits (Coleman 2009: 9 at the best
