@@ -1,7 +1,7 @@
 """The numbers a stride needs, in two arithmetics.
 
 For every mode ``j`` and every transition ``k`` out of it the stride loop
-(:mod:`symmech.gait.stride`) evaluates
+(:mod:`symmech.gait.stride_map`) evaluates
 
 * the flow ``f_j(y)`` and its Jacobian ``Df_j(y)`` (the first-order system ``y = (q, v)``);
 * the guard ``g_k(q)`` (a wall's psi), its gradient, and the condition ``c_k(q)``;
@@ -60,7 +60,7 @@ def _guard_wall(scene: Scene, name: str) -> int:
 
 
 class GaitFunctions:
-    """The interface of :mod:`symmech.gait.stride` (see the module docstring); the
+    """The interface of :mod:`symmech.gait.stride_map` (see the module docstring); the
     transitions are numbered as in ``gait.transitions``."""
 
     gait: Gait

@@ -1,7 +1,7 @@
 """Periodic gaits: fixed points of the stride map, their multipliers, and continuation.
 
 A period-one gait is a fixed point ``x* = P(x*)`` of the stride map of
-:mod:`symmech.gait.stride`, found by Newton's method on ``P(x) - x`` with the Jacobian
+:mod:`symmech.gait.stride_map`, found by Newton's method on ``P(x) - x`` with the Jacobian
 ``DP`` of the variational-saltation route: ``x <- x - (DP - I)^-1 (P(x) - x)``, damped
 (the step halved) while the stride from the new point fails or its residual more than
 doubles.  Its stability is decided by the eigenvalues of ``DP(x*)``, the multipliers of
@@ -30,7 +30,7 @@ import mpmath
 import numpy as np
 
 from symmech.gait.evaluation import GaitFunctions
-from symmech.gait.stride import GaitError, StrideOptions, StrideResult, stride
+from symmech.gait.stride_map import GaitError, StrideOptions, StrideResult, stride
 
 __all__ = [
     "FixedPoint",
@@ -100,7 +100,7 @@ def fixed_point(
 ) -> FixedPoint:
     """The fixed point of the stride map after transition ``section`` near ``x0`` (module
     docstring).  ``tol`` on ``max |P(x) - x|`` (default ``1e3 eps``, from ``fns``'s
-    arithmetic); raises :class:`~symmech.gait.stride.GaitError` if Newton does not get
+    arithmetic); raises :class:`~symmech.gait.stride_map.GaitError` if Newton does not get
     there in ``max_iterations``."""
     x = fns.array(list(x0))
     tol = 1e3 * fns.eps if tol is None else tol

@@ -34,7 +34,7 @@ from symmech.errors import SymmechError
 from symmech.gait.evaluation import CompiledGait, MpGait
 from symmech.gait.modes import Gait
 from symmech.gait.periodic import difference_jacobian, fixed_point, multipliers
-from symmech.gait.stride import StrideOptions, stride
+from symmech.gait.stride_map import StrideOptions, stride
 
 __all__ = ["ROUTES", "RouteFigure", "solve_routes", "stride_costs"]
 
