@@ -20,6 +20,7 @@ import warnings
 
 from symmech.gait.evaluation import CompiledGait
 from symmech.gait.models import GAITS
+from symmech.gait.periodic import fixed_point
 from symmech.gait.report import format_figures, solve_routes, stride_costs
 
 #: Published figures: Garcia et al. 1998 (simplest walker, gamma = 0.009, long-period
@@ -40,6 +41,13 @@ PUBLISHED = {
         },
     },
 }
+
+
+def figures_of(name: str, digits: int) -> list[float]:
+    """The C route's fixed point of a built-in gait."""
+    case = GAITS[name]
+    (c,) = solve_routes(case.build(), case.parameters, case.guess, ("c",), digits=digits)
+    return c.x
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -86,6 +94,18 @@ def main(argv: list[str] | None = None) -> int:
                 near = min(abs(z - m) for z in ref.multipliers)
                 line += f"  multiplier - published {near:.2e}"
         summary.append(line)
+    if not args.quick:
+        print("== the simplest walker with feet of mass beta against the exact limit")
+        limit = figures_of("simplest_walker", digits)
+        case = GAITS["simplest_walker_feet"]
+        base = CompiledGait(case.build(), case.parameters)
+        for beta in (1e-2, 1e-3, 1e-4, 1e-5, 1e-6):
+            fns = base.with_parameters({"beta": beta, "gamma": 0.009})
+            fp = fixed_point(fns, 0, limit)
+            print(
+                f"beta {beta:7.0e}  theta* - limit {fp.x[0] - limit[0]:+.3e}"
+                f"  theta_dot* - limit {fp.x[2] - limit[2]:+.3e}"
+            )
     print("== summary")
     print("\n".join(summary))
     return 0

@@ -216,3 +216,24 @@ def test_hopper_two_modes_of_different_sizes():
     big = fp.multipliers[0]
     assert abs(big) < 1 and abs(big.imag) < 1e-12
     assert all(abs(m) <= 1e-10 for m in fp.multipliers[1:])
+
+
+def test_feet_of_vanishing_mass_converge_to_the_exact_limit(walker):
+    """The simplest walker with feet of mass beta (an Euler-Lagrange mode, a closed-form
+    heel strike) tends to the limit declared exactly, linearly in beta: its fixed point
+    extrapolated from beta = 1e-4 and 1e-5 to 0 meets the limit's to 1e-9."""
+    from symmech.gait.models import GAITS
+
+    limit = fixed_point(CompiledGait(walker, {"gamma": 0.009}), 0, GAITS["simplest_walker"].guess)
+    case = GAITS["simplest_walker_feet"]
+    with_feet = CompiledGait(case.build(), case.parameters)
+    betas = (1e-4, 1e-5)
+    xs = [
+        fixed_point(with_feet.with_parameters({"beta": b, "gamma": 0.009}), 0, limit.x).x
+        for b in betas
+    ]
+    for i in (0, 2):
+        d1, d2 = xs[0][i] - limit.x[i], xs[1][i] - limit.x[i]
+        assert 5 < d1 / d2 < 20  # first order in beta
+        extrapolated = (betas[0] * d2 - betas[1] * d1) / (betas[0] - betas[1])
+        assert abs(extrapolated) <= 1e-9
