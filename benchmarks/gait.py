@@ -54,9 +54,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the rimless wheel at 20 digits")
     args = parser.parse_args(argv)
-    names = (
-        ["rimless_wheel"] if args.quick else ["rimless_wheel", "simplest_walker", "compass_gait"]
-    )
+    names = ["rimless_wheel"]
+    if not args.quick:
+        names += ["simplest_walker", "compass_gait", "hopper"]
     digits = 20 if args.quick else 30
     warnings.simplefilter("ignore")
     summary = []
