@@ -24,7 +24,7 @@ from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule
 from symmech.errors import SymmechError
 
-__all__ = ["Fast", "NumericalError", "Raw", "c_raw", "numpy_fast", "numpy_raw"]
+__all__ = ["PLAIN_TIMES", "Fast", "NumericalError", "Raw", "c_raw", "numpy_fast", "numpy_raw"]
 
 _STATUS = {
     1: "a matrix that must be positive definite is not",
@@ -80,7 +80,10 @@ def numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
 
 _SEQUENCES = (list, tuple)
 _DTYPES = "dl"  # float64, int64 (any byte order: a copy converts)
-_PLAIN = (float, int)
+_PLAIN = (float, int, np.float64)
+#: The times a one-state call of a function of the state and the parameters only takes on
+#: its fast path (it does not read them; anything else goes the general way, which checks).
+PLAIN_TIMES = _PLAIN
 
 
 def _plain_arguments(
