@@ -116,7 +116,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[2, 4, 8, 16, 32])
     parser.add_argument("--no-lagrange", action="store_true", help="skip LagrangesMethod")
+    parser.add_argument("--quick", action="store_true", help="a smoke test: n = 2, every route")
     args = parser.parse_args()
+    if args.quick:
+        args.sizes = [2]
     head = (
         f"{'n':>3} | {'symmech g,f [s]':>15} {'declare':>7} {'ops':>7} | "
         f"{'Gamma^k_ij default [s]':>22} {'form':>6} {'ops':>8} | "

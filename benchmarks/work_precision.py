@@ -36,14 +36,31 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", default="benchmarks/out")
     ap.add_argument("--routes", default=",".join(f"{b}:{m}" for b, m in wp.ROUTES))
+    ap.add_argument(
+        "--tolerances", default=",".join(f"{t:g}" for t in wp.TOLERANCES), help="rtol values"
+    )
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smoke test: the bouncing ball at rtol 1e-6, one timed run per row",
+    )
     args = ap.parse_args(argv)
+    if args.quick:
+        args.scenes, args.repeats, args.tolerances = "bouncing_ball", 1, "1e-6"
+        wp.MIN_SECONDS = 0.0
+    tolerances = [float(t) for t in args.tolerances.split(",")]
     routes = [tuple(r.split(":")) for r in args.routes.split(",")]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for name in args.scenes.split(","):
         case = CASES[name]
         clock = time.perf_counter()
-        ref, table = wp.rows(case, routes=routes, repeats=args.repeats)  # type: ignore[arg-type]
+        ref, table = wp.rows(
+            case,
+            routes=routes,  # type: ignore[arg-type]
+            tolerances=tolerances,
+            repeats=args.repeats,
+        )
         print(wp.format_table(case, ref, table))
         base = {r.rtol: r for r in table if r.route == "baseline"}
         print()
