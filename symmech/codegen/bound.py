@@ -85,10 +85,14 @@ def _bind(module: Any, name: str, p: np.ndarray | None) -> Callable[..., np.ndar
             return general(name, *state, params=p, t=t, inputs=inputs)
 
     else:
+        # the NumPy backend's one-state caller takes the checked parameters once, as
+        # plain floats (the extension reads the array in place and checks it in C)
+        binder = getattr(fast, "bind", None)
+        one = binder(p) if binder is not None else lambda state: fast(state, p)
 
         def bound(*state: object, t: object = None, inputs: object = None) -> np.ndarray:
             if inputs is None and (t is None or type(t) in PLAIN_TIMES):
-                out = fast(state, p)
+                out = one(state)
                 if out is not None:
                     return out
             return general(name, *state, params=p, t=t, inputs=inputs)

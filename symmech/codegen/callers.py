@@ -122,10 +122,21 @@ def numpy_fast(
     """The one-state caller of a NumPy function through its variant ``_one_<name>`` (plain
     floats, ``math``; the same operations in the same order as the vectorised function).
     None, for the general path to redo the call and explain, when the arguments are not
-    plain, a parameter breaks its rule, or the evaluation fails or is not finite."""
+    plain, a parameter breaks its rule, or the evaluation fails or is not finite.  Its
+    ``bind(p)`` is the same caller of the state alone at parameters already checked."""
     checks = [(k, (k,)) for k in spec.argument_sizes(n, n_parameters, 0)]
+    state_checks = checks[: len(spec.state)]
     out_shape = spec.out_shape
     isfinite = math.isfinite
+
+    def evaluate(values: list) -> np.ndarray | None:
+        try:
+            out = one(*values)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+            return None  # math's domain and overflow errors, a failed factorisation
+        if not all(isfinite(x) for x in out):
+            return None
+        return np.array(out).reshape(out_shape)
 
     def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
         args = _plain_arguments(state, params, spec.takes_parameters, checks)
@@ -136,14 +147,21 @@ def numpy_fast(
             p = values[-1]
             if not all(isfinite(p[r.index]) and r.holds_value(p[r.index]) for r in rules):
                 return None  # the general path names the parameter
-        try:
-            out = one(*values)
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
-            return None  # math's domain and overflow errors, a failed factorisation
-        if not all(isfinite(x) for x in out):
-            return None
-        return np.array(out).reshape(out_shape)
+        return evaluate(values)
 
+    def bind(params: np.ndarray | None) -> Callable[[tuple[object, ...]], np.ndarray | None]:
+        p = [params.tolist()] if spec.takes_parameters and params is not None else []
+
+        def bound(state: tuple[object, ...]) -> np.ndarray | None:
+            args = _plain_arguments(state, None, False, state_checks)
+            if args is None:
+                return None
+            values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
+            return evaluate(values + p)
+
+        return bound
+
+    fast.bind = bind  # type: ignore[attr-defined]
     return fast
 
 
