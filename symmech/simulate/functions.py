@@ -108,10 +108,9 @@ class Functions:
             if bound is None:
                 bound = self._bound_modules[mode] = mod.bind(self._pvec(mode))
             spec = {f.name: f for f in mod.code.functions}.get(name)
-            fn = getattr(bound, name, None) if spec is not None else None
-            if fn is None:  # not generated: the module's call explains
+            if spec is None:  # not generated: the module's call explains
                 return mod.call(name, *state, params=self._pvec(mode))
-            entry = self._bound[key] = (fn, spec.takes_time)
+            entry = self._bound[key] = (getattr(bound, name), spec.takes_time)
         fn, takes_t = entry
         return fn(*state, t=t) if takes_t else fn(*state)
 
