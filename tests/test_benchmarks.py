@@ -19,7 +19,7 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 SCRIPTS: dict[str, tuple[tuple[str, ...], str]] = {
     "codegen.py": ((), "total run time:"),
     "contacts.py": ((), "| two-wall contact (enter, settle) |"),
-    "derive.py": ((), "issue 13 targets"),
+    "derive.py": ((), "Kane/sm >= 20 at n = 8 and 16 for both forms of T"),
     "hostile_checks.py": ((), "ratio"),
     "impacts.py": ((), "3-link cart, tip wall"),
     "mechanics.py": ((), "symmech all functions: the same"),

@@ -17,14 +17,15 @@ from __future__ import annotations
 
 import random
 from collections.abc import Iterable
-from functools import lru_cache
 
 import sympy as sp
+
+from symmech.algebra.memo import expression_cache
 
 __all__ = ["atom_key", "sample_point", "sample_points"]
 
 
-@lru_cache(maxsize=4096, typed=True)
+@expression_cache(maxsize=4096)
 def atom_key(atom: sp.Basic) -> tuple[str, str]:
     """A total, process-independent order on symbols and other atoms: (name, srepr)
     (a function of the atom alone, remembered: printing is slow)."""
