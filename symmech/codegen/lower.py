@@ -501,7 +501,7 @@ def lower(
             cost += f" + {callee.solve_flops} flops"
     scaled = f.kind == "impact" and not plan.moving_walls[f.wall_index or 0]
     scalar_body = None
-    if scalar is not None and not (takes_t or takes_u or scaled):
+    if scalar is not None and not (takes_t or takes_u):
         scalar_body = _scalar_body(
             f, plan.n, unpack, replacements, where, final, program, check, table, scalar, callee
         )
