@@ -117,8 +117,8 @@ def test_bind_refuses_a_wrong_mapping_or_count(mod):
 
 @pytest.mark.parametrize(
     "bad",
-    [np.zeros(3), [0.1] * 3, "abc", np.zeros((2, 3)), np.full(8, 1j)],
-    ids=["short", "short list", "string", "wrong width", "complex"],
+    [np.zeros(3), [0.1] * 3, "abc", np.zeros((2, 3)), np.full(8, 1j), [10**400] * 8],
+    ids=["short", "short list", "string", "wrong width", "complex", "int beyond float64"],
 )
 def test_a_bound_call_refuses_what_a_call_refuses(mod, bad):
     _, p = _point(mod, 5)

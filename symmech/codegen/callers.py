@@ -116,6 +116,15 @@ def _plain_arguments(
     return args
 
 
+def _float_lists(args: Sequence[object]) -> list[list] | None:
+    """The plain arguments as lists of floats; None for an int beyond float64 (the general
+    path explains)."""
+    try:
+        return [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
+    except OverflowError:
+        return None
+
+
 def numpy_fast(
     one: Callable, spec: LoweredFunction, n: int, n_parameters: int, rules: Sequence[ParameterRule]
 ) -> Fast:
@@ -142,7 +151,9 @@ def numpy_fast(
         args = _plain_arguments(state, params, spec.takes_parameters, checks)
         if args is None:
             return None
-        values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
+        values = _float_lists(args)
+        if values is None:
+            return None
         if spec.takes_parameters:
             p = values[-1]
             if not all(isfinite(p[r.index]) and r.holds_value(p[r.index]) for r in rules):
@@ -156,8 +167,8 @@ def numpy_fast(
             args = _plain_arguments(state, None, False, state_checks)
             if args is None:
                 return None
-            values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
-            return evaluate(values + p)
+            values = _float_lists(args)
+            return None if values is None else evaluate(values + p)
 
         return bound
 
@@ -268,30 +279,41 @@ def c_raw(
         lead = np.broadcast_shapes(*leads)
         if lead == ():
             return call_single(values)
-        count = int(np.prod(lead))
-        per_state = [
-            v
-            if a == "p"
-            else np.ascontiguousarray(np.broadcast_to(v, lead).reshape(count))
-            if a == "t"
-            else np.ascontiguousarray(np.broadcast_to(v, (*lead, k)).reshape(count, k))
-            for a, v, k in zip(names, values, sizes, strict=True)
-        ]
-        out = np.empty((count, spec.out_size))
-        first = batch(count, *[a.ctypes.data for a in per_state], out.ctypes.data)
-        if first:
-            # re-run the failing state alone to learn why
-            i = first - 1
-            try:
-                call_single(
-                    [v if a == "p" else v[i] for a, v in zip(names, per_state, strict=True)]
-                )
-            except NumericalError as exc:
-                raise _failed(spec.name, i, str(exc).split(": ", 1)[1]) from None
-            raise _failed(spec.name, i, "failed in the batch call only")
-        return out.reshape((*lead, *out_shape))
+        return _batch(batch, call_single, spec, sizes, values, lead)
 
     return call, fast
+
+
+def _batch(
+    batch: Any,
+    call_single: Callable[[Sequence[Any]], np.ndarray],
+    spec: LoweredFunction,
+    sizes: Sequence[int],
+    values: Sequence[Any],
+    lead: tuple[int, ...],
+) -> np.ndarray:
+    """The batch function over the states of shape ``lead`` (the arguments broadcast and
+    made contiguous, p shared); a failing state is run alone to learn why."""
+    names = spec.arguments
+    count = int(np.prod(lead))
+    per_state = [
+        v
+        if a == "p"
+        else np.ascontiguousarray(np.broadcast_to(v, lead).reshape(count))
+        if a == "t"
+        else np.ascontiguousarray(np.broadcast_to(v, (*lead, k)).reshape(count, k))
+        for a, v, k in zip(names, values, sizes, strict=True)
+    ]
+    out = np.empty((count, spec.out_size))
+    first = batch(count, *[a.ctypes.data for a in per_state], out.ctypes.data)
+    if first:
+        i = first - 1
+        try:
+            call_single([v if a == "p" else v[i] for a, v in zip(names, per_state, strict=True)])
+        except NumericalError as exc:
+            raise _failed(spec.name, i, str(exc).split(": ", 1)[1]) from None
+        raise _failed(spec.name, i, "failed in the batch call only")
+    return out.reshape((*lead, *spec.out_shape))
 
 
 def _parameters_hold(rules: Sequence[ParameterRule], p: np.ndarray) -> bool:
