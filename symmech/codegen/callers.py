@@ -138,14 +138,18 @@ def numpy_fast(
     out_shape = spec.out_shape
     isfinite = math.isfinite
 
+    flat = len(out_shape) == 1
+
     def evaluate(values: list) -> np.ndarray | None:
         try:
             out = one(*values)
         except (ArithmeticError, ValueError, np.linalg.LinAlgError):
             return None  # math's domain and overflow errors, a failed factorisation
-        if not all(isfinite(x) for x in out):
+        # a finite sum means finite entries (an inf or a NaN makes any sum inf or NaN);
+        # a sum that overflows sends a finite output to the general path, which is exact
+        if not isfinite(sum(out)):
             return None
-        return np.array(out).reshape(out_shape)
+        return np.array(out) if flat else np.array(out).reshape(out_shape)
 
     def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
         args = _plain_arguments(state, params, spec.takes_parameters, checks)
@@ -164,6 +168,14 @@ def numpy_fast(
         p = [params.tolist()] if spec.takes_parameters and params is not None else []
 
         def bound(state: tuple[object, ...]) -> np.ndarray | None:
+            if len(state) == len(state_checks):  # the common case: float64 vectors
+                values = []
+                for a, (_, shape) in zip(state, state_checks, strict=True):
+                    if type(a) is not np.ndarray or a.dtype.char != "d" or a.shape != shape:
+                        break
+                    values.append(a.tolist())
+                else:
+                    return evaluate(values + p)
             args = _plain_arguments(state, None, False, state_checks)
             if args is None:
                 return None
