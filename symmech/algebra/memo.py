@@ -8,7 +8,9 @@ last run's, so a memo that outlived sympy's cache made the run slower, not faste
 pendulum on a cart declared as users write it spent most of its time in these
 comparisons).  :func:`expression_cache` is :func:`functools.lru_cache` registered in
 sympy's list of caches (``sympy.core.cache.CACHE``, where sympy's own ``cacheit``
-registers its memos), so that ``clear_cache()`` empties it too.
+registers its memos), so that ``clear_cache()`` empties it too.  Memos keyed by atoms or
+numbers, whose ``==`` is cheap, are plain ``lru_cache`` and outlive sympy's cache (their
+values, a ``srepr`` or an ``evalf``, cost more to recompute than to find).
 """
 
 from __future__ import annotations

@@ -30,14 +30,13 @@ import math
 import threading
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
+from functools import lru_cache
 from typing import Any, ClassVar
 
 import mpmath
 import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
-
-from symmech.algebra.memo import expression_cache
 
 __all__ = [
     "EvaluationError",
@@ -143,7 +142,7 @@ def _complex(value: Any) -> complex:
     return complex(value)
 
 
-@expression_cache(maxsize=4096, typed=False)
+@lru_cache(maxsize=4096)  # numbers: their == is cheap, kept across runs
 def _complex_rational(value: sp.Rational) -> complex:
     return complex(float(value.evalf()), 0.0)
 

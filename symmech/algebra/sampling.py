@@ -17,15 +17,14 @@ from __future__ import annotations
 
 import random
 from collections.abc import Iterable
+from functools import lru_cache
 
 import sympy as sp
-
-from symmech.algebra.memo import expression_cache
 
 __all__ = ["atom_key", "sample_point", "sample_points"]
 
 
-@expression_cache(maxsize=4096)
+@lru_cache(maxsize=4096, typed=True)  # atoms: their == is cheap, kept across runs
 def atom_key(atom: sp.Basic) -> tuple[str, str]:
     """A total, process-independent order on symbols and other atoms: (name, srepr)
     (a function of the atom alone, remembered: printing is slow)."""

@@ -179,8 +179,8 @@ def numpy_fast(
             args = _plain_arguments(state, None, False, state_checks)
             if args is None:
                 return None
-            values = _float_lists(args)
-            return None if values is None else evaluate(values + p)
+            lists = _float_lists(args)
+            return None if lists is None else evaluate(lists + p)
 
         return bound
 
