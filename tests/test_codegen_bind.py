@@ -150,3 +150,17 @@ def test_a_function_that_was_not_generated_is_named(mod):
         bound.impact  # noqa: B018
     with pytest.raises(CodegenError, match="impact was not generated"):
         bound.call("impact", np.zeros(mod.n), np.zeros(mod.n))
+
+
+def test_a_batch_of_parameter_vectors_is_bound_as_the_module_takes_it(mod):
+    """NumPy broadcasts a batch of parameter vectors; C shares one vector across a batch
+    and says so; bound, each does what its module does with them."""
+    y, p = _point(mod, 8)
+    batch = np.stack([p, 1.5 * p])
+    bound = mod.bind(batch)
+    if mod.backend == "numpy":
+        expected = mod.rhs(y, batch)
+        assert expected.shape == (2, 2 * mod.n)
+        assert np.array_equal(bound.rhs(y), expected)
+    else:
+        _same_error(lambda: mod.rhs(y, batch), lambda: bound.rhs(y))

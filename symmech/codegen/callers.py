@@ -165,6 +165,8 @@ def numpy_fast(
         return evaluate(values)
 
     def bind(params: np.ndarray | None) -> Callable[[tuple[object, ...]], np.ndarray | None]:
+        if params is not None and params.ndim != 1:
+            return lambda state: None  # a batch of parameter vectors: the general path
         p = [params.tolist()] if spec.takes_parameters and params is not None else []
 
         def bound(state: tuple[object, ...]) -> np.ndarray | None:
