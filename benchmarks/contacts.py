@@ -67,7 +67,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--runs", type=int, default=50_000)
     parser.add_argument("--repeats", type=int, default=9)
+    parser.add_argument("--quick", action="store_true", help="a smoke test: 200 runs, once")
     args = parser.parse_args()
+    if args.quick:
+        args.runs, args.repeats = 200, 1
     scene = sm.load_scene("falling_rod")
     # warm: generate, compile and build the pair's contact mode in
     for kind in ("leaving", "one", "two", "rest"):

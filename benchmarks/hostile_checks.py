@@ -2,7 +2,9 @@
 checks of the closed forms, scale-invariant impacts), as ratios against a baseline
 revision of symmech measured in the same run.
 
-    python3 benchmarks/hostile_checks.py [BASELINE_REVISION]
+    python3 benchmarks/hostile_checks.py [BASELINE_REVISION] [--quick]
+
+``--quick`` (a smoke test): each tree once, fewer calls per timing.
 
 The baseline (default ``e785862``, the tree before these checks) is exported with
 ``git archive`` into a temporary folder; each tree runs the same timing code in its own
@@ -43,7 +45,12 @@ Q, V = rng.normal(size=(100_000, 3)), rng.normal(size=(100_000, 3))
 P = np.array(p)
 
 
+QUICK = len(sys.argv) > 2 and sys.argv[2] == "--quick"
+
+
 def best(fn, number):
+    if QUICK:
+        return timeit.timeit(fn, number=max(1, number // 100)) / max(1, number // 100) * 1e6
     return min(timeit.repeat(fn, number=number, repeat=7)) / number * 1e6
 
 
@@ -58,10 +65,10 @@ print(json.dumps(out))
 """
 
 
-def _run(tree: Path, cache: Path) -> dict[str, float]:
+def _run(tree: Path, cache: Path, quick: bool) -> dict[str, float]:
     env = {**os.environ, "PYTHONPATH": str(tree), "SYMMECH_CACHE_DIR": str(cache)}
     proc = subprocess.run(
-        [sys.executable, "-c", TIMING, str(tree)],
+        [sys.executable, "-c", TIMING, str(tree), *(["--quick"] if quick else [])],
         cwd=tree,
         env=env,
         capture_output=True,
@@ -73,7 +80,7 @@ def _run(tree: Path, cache: Path) -> dict[str, float]:
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def main(revision: str = "e785862") -> None:
+def main(revision: str = "e785862", quick: bool = False) -> None:
     with tempfile.TemporaryDirectory(prefix="symmech_baseline_") as tmp:
         base = Path(tmp) / "tree"
         base.mkdir()
@@ -86,9 +93,9 @@ def main(revision: str = "e785862") -> None:
         shutil.copytree(base / "templates", base / "symmech" / "templates")
         # alternate the trees (the machine is shared): the best of three runs of each
         runs: dict[str, list[dict[str, float]]] = {"base": [], "now": []}
-        for _ in range(3):
-            runs["base"].append(_run(base, Path(tmp) / "cache_base"))
-            runs["now"].append(_run(ROOT, Path(tmp) / "cache_now"))
+        for _ in range(1 if quick else 3):
+            runs["base"].append(_run(base, Path(tmp) / "cache_base", quick))
+            runs["now"].append(_run(ROOT, Path(tmp) / "cache_now", quick))
         before = {k: min(r[k] for r in runs["base"]) for k in runs["base"][0]}
         after = {k: min(r[k] for r in runs["now"]) for k in runs["now"][0]}
     width = max(len(k) for k in after)
@@ -99,4 +106,10 @@ def main(revision: str = "e785862") -> None:
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:2])
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("revision", nargs="?", default="e785862", help="the baseline revision")
+    ap.add_argument("--quick", action="store_true", help="a smoke test: each tree once")
+    args = ap.parse_args()
+    main(args.revision, args.quick)

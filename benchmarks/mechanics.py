@@ -22,11 +22,15 @@ For the Whipple bicycle of sympy's own test suite (Meijaard et al. 2007; 4 coord
   KanesMethod plus the PyDy route (target: a ratio below 1), and the full set of
   functions the same way (target: within 1.5x).
 
-Usage: python3 benchmarks/mechanics.py
+Usage: python3 benchmarks/mechanics.py [--quick]
+
+``--quick`` (a smoke test) runs every step on the 1-link pendulum on a cart of
+``benchmarks/derive.py`` (KanesMethod of sympy.physics.mechanics) instead of the bicycle.
 """
 
 from __future__ import annotations
 
+import argparse
 import sys
 import tempfile
 import time
@@ -58,9 +62,25 @@ def pydy_generation(KM: object) -> float:
     return time.perf_counter() - t0
 
 
+def small_model(timings: dict) -> object:
+    """KanesMethod of the 1-link pendulum on a cart (``derive._mechanics_model``)."""
+    from derive import _mechanics_model
+    from sympy.physics.mechanics import KanesMethod
+
+    q, u, frame, particles, forces, kindiffs = _mechanics_model(1)
+    t0 = time.perf_counter()
+    KM = KanesMethod(frame, q_ind=q, u_ind=u, kd_eqs=kindiffs)
+    KM.kanes_equations(particles, forces)
+    timings["kane"] = time.perf_counter() - t0
+    return KM
+
+
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="a smoke test (see the docstring)")
+    quick = ap.parse_args().quick
     timings: dict = {}
-    KM, _ = sympy_bicycle(timings)
+    KM = small_model(timings) if quick else sympy_bicycle(timings)[0]
     kane = timings["kane"]
     pydy = pydy_generation(KM)
     warnings.simplefilter("ignore")
@@ -76,7 +96,8 @@ def main() -> None:
         code.load()
         t4 = time.perf_counter()
     imp, gen, comp = t1 - t0, t2 - t1, t4 - t3
-    print("Whipple bicycle (sympy test_kane3), seconds on this machine")
+    model = "1-link pendulum on a cart (--quick)" if quick else "Whipple bicycle (sympy test_kane3)"
+    print(f"{model}, seconds on this machine")
     print(f"{'KanesMethod forms the equations (baseline)':48s} {kane:8.2f}")
     print(f"{'PyDy route: cse + C printing of Kane M, f':48s} {pydy:8.2f}")
     print(f"{'KanesMethod + PyDy route':48s} {kane + pydy:8.2f}")

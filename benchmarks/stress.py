@@ -12,12 +12,18 @@ import time
 
 from symmech.bench import stress
 
+#: the case ``--quick`` runs (a smoke test of the script)
+QUICK_CASE = "grazing"
+
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--backend", default="c", choices=("c", "numpy", "scipy"))
     ap.add_argument("-k", dest="cases", action="append", choices=sorted(stress.CASES))
+    ap.add_argument("--quick", action="store_true", help=f"a smoke test: {QUICK_CASE} only")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.cases = [QUICK_CASE]
     clock = time.perf_counter()
     results = stress.run_all(args.backend, args.cases)
     print(stress.format_table(results))

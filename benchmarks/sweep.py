@@ -208,11 +208,19 @@ def main() -> None:
     ap.add_argument("--big", type=int, default=0, help="also an N-run ellipse sweep, both routes")
     ap.add_argument("--repeat", type=int, default=3, help="runs per timed route (shortest kept)")
     ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smoke test: the ellipse, 200 runs, each route once",
+    )
+    ap.add_argument(
         "--no-profiler",
         action="store_true",
         help="the cluster's workers without Dask's statistical profiler",
     )
     args = ap.parse_args()
+    if args.quick:
+        args.runs, args.dask_chunk, args.grow = 200, 100, 2
+        args.cases, args.repeat = "ellipse_gravity", 1
     global REPEAT
     REPEAT = max(1, args.repeat)
 

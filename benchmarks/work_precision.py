@@ -36,14 +36,31 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--out", default="benchmarks/out")
     ap.add_argument("--routes", default=",".join(f"{b}:{m}" for b, m in wp.ROUTES))
+    ap.add_argument(
+        "--tolerances", default=",".join(f"{t:g}" for t in wp.TOLERANCES), help="rtol values"
+    )
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smoke test: the bouncing ball at rtol 1e-6, one timed run per row",
+    )
     args = ap.parse_args(argv)
+    if args.quick:
+        args.scenes, args.repeats, args.tolerances = "bouncing_ball", 1, "1e-6"
+        wp.MIN_SECONDS = 0.0
+    tolerances = [float(t) for t in args.tolerances.split(",")]
     routes = [tuple(r.split(":")) for r in args.routes.split(",")]
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     for name in args.scenes.split(","):
         case = CASES[name]
         clock = time.perf_counter()
-        ref, table = wp.rows(case, routes=routes, repeats=args.repeats)  # type: ignore[arg-type]
+        ref, table = wp.rows(
+            case,
+            routes=routes,  # type: ignore[arg-type]
+            tolerances=tolerances,
+            repeats=args.repeats,
+        )
         print(wp.format_table(case, ref, table))
         base = {r.rtol: r for r in table if r.route == "baseline"}
         print()
@@ -59,7 +76,8 @@ def main(argv: list[str] | None = None) -> int:
                 )
         best = [r for r in table if r.route == "baseline" and math.isfinite(r.final_error)]
         if best:
-            _equal_error(table, best)
+            for route in dict.fromkeys(r.route for r in table if r.route != "baseline"):
+                _equal_error(table, best, route)
         else:
             print(
                 "\nthe baseline reaches t_end at no tolerance: no equal-error comparison;"
@@ -71,8 +89,9 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-def _equal_error(table: list, best: list) -> None:
-    """Print the C backend's speed-up over the baseline at equal error, three ways.
+def _equal_error(table: list, best: list, route: str = "c") -> None:
+    """Print the speed-up of the backend ``route`` (any of its methods) over the baseline
+    at equal error, three ways (below, "C" stands for the backend).
 
     * strict: the cheapest C run (any method, any tolerance) whose error is at most the
       baseline's smallest error, against the cheapest baseline run as accurate as that C run;
@@ -82,7 +101,11 @@ def _equal_error(table: list, best: list) -> None:
       a few thousand ulps, where the error is the rounding of the arithmetic and differs
       between runs by luck), the cheapest run of each.
     """
-    c_runs = [r for r in table if r.route == "c" and math.isfinite(r.final_error)]
+    c_runs = [r for r in table if r.route == route and math.isfinite(r.final_error)]
+    if not c_runs:
+        print(f"\n{route}: no run reaches t_end; no equal-error comparison")
+        return
+    print(f"\n{route} backend against the baseline (> 1: the backend is faster):")
     err = min(r.final_error for r in best)
     fast = [r for r in c_runs if r.final_error <= err]
     if fast:
@@ -91,9 +114,12 @@ def _equal_error(table: list, best: list) -> None:
             (r for r in best if r.final_error <= max(err, c.final_error)), key=lambda r: r.seconds
         )
         print(
-            f"\nat equal error, strict ({err:.1e}): baseline {b.seconds:.2e} s,"
-            f" C {c.seconds:.2e} s ({c.method}, rtol {c.rtol:.0e}): {b.seconds / c.seconds:.0f}x"
+            f"at equal error, strict ({err:.1e}): baseline {b.seconds:.2e} s,"
+            f" {route} {c.seconds:.2e} s ({c.method}, rtol {c.rtol:.0e}):"
+            f" {b.seconds / c.seconds:.2f}x"
         )
+    else:
+        print(f"at equal error, strict ({err:.1e}): no {route} run is as accurate")
     ratios = []
     for b in best:
         ok = [r for r in c_runs if r.final_error <= b.final_error]
@@ -101,15 +127,16 @@ def _equal_error(table: list, best: list) -> None:
             ratios.append(b.seconds / min(ok, key=lambda r: r.seconds).seconds)
     if ratios:
         print(
-            f"along the curve (each baseline run against the cheapest C run at least as"
-            f" accurate): {min(ratios):.0f}x to {max(ratios):.0f}x"
+            f"along the curve (each baseline run against the cheapest {route} run at least as"
+            f" accurate): {min(ratios):.2f}x to {max(ratios):.2f}x"
         )
     if c_runs and all(r.final_error < FLOOR for r in [*best, *c_runs]):
         b = min(best, key=lambda r: r.seconds)
         c = min(c_runs, key=lambda r: r.seconds)
         print(
             f"at the floor (every error of both below {FLOOR:.0e}): baseline {b.seconds:.2e} s,"
-            f" C {c.seconds:.2e} s ({c.method}, rtol {c.rtol:.0e}): {b.seconds / c.seconds:.0f}x"
+            f" {route} {c.seconds:.2e} s ({c.method}, rtol {c.rtol:.0e}):"
+            f" {b.seconds / c.seconds:.2f}x"
         )
 
 

@@ -91,3 +91,24 @@ def test_a_failure_in_the_variant_is_reported_by_the_general_path():
     m2 = sm.codegen.generate(s2, "numpy").load()
     with pytest.raises(NumericalError, match="not finite"):
         m2.acceleration([1000.0], [0.0], [1.0])
+
+
+@pytest.mark.parametrize("speed", [1e-300, 1e-150, 1.0, 1e150, 1e300])
+def test_the_scaled_impact_variant_is_scale_invariant_as_the_vectorised_one(speed):
+    """A static wall's impact map is evaluated for v / 2^e and scaled back, so that no
+    intermediate under- or overflows (the energy law's map holds square roots of quadratic
+    forms in v); its one-state variant scales by the same exponent."""
+    from symmech.examples import spinning_disk
+
+    mod = sm.codegen.generate(spinning_disk(), "numpy").load()
+    (name,) = [f.name for f in mod.code.functions if f.scaled]
+    assert name in mod._fast
+    p = np.full(len(mod.parameters), 0.7)
+    rng = np.random.default_rng(5)
+    q, v = rng.normal(size=mod.n), speed * rng.normal(size=mod.n)
+    one = mod._fast[name]((q, v), p)
+    general = mod._raw[name]((q, v), p, None, None)
+    assert one is not None and np.all(np.isfinite(one)), one
+    np.testing.assert_allclose(one, general, rtol=4e-15, atol=0)
+    unit = mod._fast[name]((q, v / speed), p)
+    np.testing.assert_allclose(one / speed, unit, rtol=4e-15, atol=0)

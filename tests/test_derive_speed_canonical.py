@@ -320,3 +320,36 @@ def test_xreplace_is_sympys() -> None:
     unevaluated = sp.Add(x, x, evaluate=False)
     assert sp.srepr(xreplace(unevaluated, {y: 1})) == sp.srepr(unevaluated.xreplace({y: 1}))
     assert sp.srepr(xreplace(unevaluated, {x: x})) == sp.srepr(unevaluated.xreplace({x: x}))
+
+
+def test_memos_of_expressions_are_emptied_with_sympys_cache() -> None:
+    """A memo keyed by expressions that outlives sympy's cache compares the twins a new
+    run builds with == node by node (issue 27: most of the time of a pendulum declared as
+    users write it, after clear_cache): symmech's memos are emptied with sympy's."""
+    from sympy.core.cache import clear_cache
+
+    pendulum_on_cart(2).forcing()
+    assert canonical._sort_key.cache_info().currsize > 0
+    clear_cache()
+    assert canonical._sort_key.cache_info().currsize == 0
+
+
+def test_compiled_programs_are_kept_by_identity_of_the_matrix() -> None:
+    """The program of a matrix is reused for the same entries; a structurally equal matrix
+    built anew (after sympy's cache is cleared) gets its own, with no deep == between the
+    two, and both give the same values."""
+    from sympy.core.cache import clear_cache
+
+    env = {x: 0.3, y: -1.2, z: 2.0}
+
+    def build() -> sp.Matrix:
+        return sp.Matrix([[sp.sin(x) * y + z**2, sp.exp(x * y)], [x + y + z, sp.cos(z) / y]])
+
+    first = build()
+    program = numeric._Program.of(first, env)
+    assert program is not None and numeric._Program.of(first, env) is program
+    clear_cache()
+    twin = build()
+    assert twin == first and twin[0, 0] is not first[0, 0]
+    assert numeric._Program.of(twin, env) is not program
+    assert np.array_equal(numeric.evaluate_matrix(first, env), numeric.evaluate_matrix(twin, env))

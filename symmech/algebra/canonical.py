@@ -38,7 +38,6 @@ is built about three times faster than by ``Mul``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from functools import lru_cache
 from typing import Any
 
 import sympy as sp
@@ -47,6 +46,8 @@ from sympy.core.add import Add
 from sympy.core.function import AppliedUndef
 from sympy.core.mul import Mul
 from sympy.core.power import Pow
+
+from symmech.algebra.memo import expression_cache
 
 try:  # sympy internals the fast routes read (see CHECKED_SYMPY)
     from sympy.core.mul import _keep_coeff, _mulsort
@@ -100,7 +101,7 @@ def _class_key(cls: type) -> tuple[int, str]:
     return hit
 
 
-@lru_cache(maxsize=1 << 15, typed=True)
+@expression_cache(maxsize=1 << 15)
 def _sort_key(e: sp.Basic) -> tuple[Any, ...]:
     """A key ordering expressions as ``Basic.compare`` does: class, then the length and
     the items of ``_hashable_content()`` in turn (sub-expressions by their keys, other

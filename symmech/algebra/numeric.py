@@ -142,7 +142,7 @@ def _complex(value: Any) -> complex:
     return complex(value)
 
 
-@lru_cache(maxsize=4096)
+@lru_cache(maxsize=4096)  # numbers: their == is cheap, kept across runs
 def _complex_rational(value: sp.Rational) -> complex:
     return complex(float(value.evalf()), 0.0)
 
@@ -233,7 +233,7 @@ class _Program:
     """
 
     _MAX_DEPTH: ClassVar[int] = 200
-    _cache: ClassVar[OrderedDict[tuple, _Program]] = OrderedDict()
+    _cache: ClassVar[OrderedDict[tuple, tuple[_Program, tuple]]] = OrderedDict()
     _CACHE_SIZE: ClassVar[int] = 8
     #: guards the cache (scenes may be declared in several threads at once)
     _lock: ClassVar[threading.Lock] = threading.Lock()
@@ -247,16 +247,22 @@ class _Program:
         """The program of ``M`` for points with the atoms of ``env`` (None: walk)."""
         if any(v is None for v in env.values()):
             return None  # (the walk takes an atom given None as an atom without a value)
-        key = (M.rows, M.cols, tuple(e for row in M.tolist() for e in row), frozenset(env))
+        # keyed by the identity of the entries (kept alive with the program, so their ids
+        # are not reused while cached): a structurally equal matrix built anew (a scene
+        # declared again after sympy's cache was cleared) would otherwise be compared
+        # with == node by node, which visits shared subtrees once per path (exponential
+        # in the depth of a DAG); it compiles its own program instead, in linear time
+        entries = tuple(e for row in M.tolist() for e in row)
+        key = (M.rows, M.cols, tuple(map(id, entries)), frozenset(env))
         with cls._lock:
             hit = cls._cache.get(key)
             if hit is not None:
                 cls._cache.move_to_end(key)
-                return hit
+                return hit[0]
         program = cls._compile(M, env)
         if program is not None:
             with cls._lock:
-                cls._cache[key] = program
+                cls._cache[key] = (program, entries)
                 while len(cls._cache) > cls._CACHE_SIZE:
                     cls._cache.popitem(last=False)
         return program

@@ -24,7 +24,7 @@ import sympy as sp
 __all__ = ["atom_key", "sample_point", "sample_points"]
 
 
-@lru_cache(maxsize=4096, typed=True)
+@lru_cache(maxsize=4096, typed=True)  # atoms: their == is cheap, kept across runs
 def atom_key(atom: sp.Basic) -> tuple[str, str]:
     """A total, process-independent order on symbols and other atoms: (name, srepr)
     (a function of the atom alone, remembered: printing is slow)."""

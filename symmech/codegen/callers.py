@@ -24,7 +24,7 @@ from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule
 from symmech.errors import SymmechError
 
-__all__ = ["Fast", "NumericalError", "Raw", "c_raw", "numpy_fast", "numpy_raw"]
+__all__ = ["PLAIN_TIMES", "Fast", "NumericalError", "Raw", "c_raw", "numpy_fast", "numpy_raw"]
 
 _STATUS = {
     1: "a matrix that must be positive definite is not",
@@ -46,14 +46,18 @@ def _failed(name: str, index: int | None, detail: str) -> NumericalError:
     return NumericalError(f"{name}{where}: {detail}")
 
 
+def _by_name(spec: LoweredFunction, state: Sequence[object], p, t, u) -> list:
+    """The values of ``spec``'s arguments in the order of its
+    :attr:`~symmech.codegen.lower.LoweredFunction.arguments`."""
+    given = {"p": p, "t": t, "u": u, **dict(zip(spec.state, state, strict=True))}
+    return [given[a] for a in spec.arguments]
+
+
 def numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
     shape_out = spec.out_shape
 
     def call(state, p, t, u):
-        args = list(state)
-        args += [p] if spec.takes_parameters else []
-        args += [t] if spec.takes_time else []
-        args += [u] if spec.takes_inputs else []
+        args = _by_name(spec, state, p, t, u)
         try:
             with np.errstate(all="ignore"):
                 out = np.asarray(fn(*args), dtype=np.float64)
@@ -76,7 +80,10 @@ def numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
 
 _SEQUENCES = (list, tuple)
 _DTYPES = "dl"  # float64, int64 (any byte order: a copy converts)
-_PLAIN = (float, int)
+_PLAIN = (float, int, np.float64)
+#: The times a one-state call of a function of the state and the parameters only takes on
+#: its fast path (it does not read them; anything else goes the general way, which checks).
+PLAIN_TIMES = _PLAIN
 
 
 def _plain_arguments(
@@ -109,38 +116,92 @@ def _plain_arguments(
     return args
 
 
+def _float_lists(args: Sequence[object]) -> list[list] | None:
+    """The plain arguments as lists of floats; None for an int beyond float64 (the general
+    path explains)."""
+    try:
+        return [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
+    except OverflowError:
+        return None
+
+
 def numpy_fast(
     one: Callable, spec: LoweredFunction, n: int, n_parameters: int, rules: Sequence[ParameterRule]
 ) -> Fast:
     """The one-state caller of a NumPy function through its variant ``_one_<name>`` (plain
     floats, ``math``; the same operations in the same order as the vectorised function).
     None, for the general path to redo the call and explain, when the arguments are not
-    plain, a parameter breaks its rule, or the evaluation fails or is not finite."""
-    sizes = [2 * n if s == "y" else n for s in spec.state]
-    checks = [(k, (k,)) for k in sizes]
-    if spec.takes_parameters:
-        checks.append((n_parameters, (n_parameters,)))
+    plain, a parameter breaks its rule, or the evaluation fails or is not finite.  Its
+    ``bind(p)`` is the same caller of the state alone at parameters already checked."""
+    checks = [(k, (k,)) for k in spec.argument_sizes(n, n_parameters, 0)]
+    state_checks = checks[: len(spec.state)]
     out_shape = spec.out_shape
     isfinite = math.isfinite
+
+    flat = len(out_shape) == 1
+
+    def evaluate(values: list) -> np.ndarray | None:
+        try:
+            out = one(*values)
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+            return None  # math's domain and overflow errors, a failed factorisation
+        # a finite sum means finite entries (an inf or a NaN makes any sum inf or NaN);
+        # a sum that overflows sends a finite output to the general path, which is exact
+        if not isfinite(sum(out)):
+            return None
+        return np.array(out) if flat else np.array(out).reshape(out_shape)
 
     def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
         args = _plain_arguments(state, params, spec.takes_parameters, checks)
         if args is None:
             return None
-        values = [a.tolist() if type(a) is np.ndarray else [float(x) for x in a] for a in args]  # type: ignore[attr-defined]
+        values = _float_lists(args)
+        if values is None:
+            return None
         if spec.takes_parameters:
             p = values[-1]
             if not all(isfinite(p[r.index]) and r.holds_value(p[r.index]) for r in rules):
                 return None  # the general path names the parameter
-        try:
-            out = one(*values)
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
-            return None  # math's domain and overflow errors, a failed factorisation
-        if not all(isfinite(x) for x in out):
-            return None
-        return np.array(out).reshape(out_shape)
+        return evaluate(values)
 
+    def bind(params: np.ndarray | None) -> Callable[[tuple[object, ...]], np.ndarray | None]:
+        if params is not None and params.ndim != 1:
+            return lambda state: None  # a batch of parameter vectors: the general path
+        p = [params.tolist()] if spec.takes_parameters and params is not None else []
+
+        def bound(state: tuple[object, ...]) -> np.ndarray | None:
+            if len(state) == len(state_checks):  # the common case: float64 vectors
+                values = []
+                for a, (_, shape) in zip(state, state_checks, strict=True):
+                    if type(a) is not np.ndarray or a.dtype.char != "d" or a.shape != shape:
+                        break
+                    values.append(a.tolist())
+                else:
+                    return evaluate(values + p)
+            args = _plain_arguments(state, None, False, state_checks)
+            if args is None:
+                return None
+            lists = _float_lists(args)
+            return None if lists is None else evaluate(lists + p)
+
+        return bound
+
+    fast.bind = bind  # type: ignore[attr-defined]
     return fast
+
+
+def _prototypes(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction) -> tuple[Any, Any]:
+    """The one-state function as a prototype of plain addresses (a double for ``t``), and
+    the batch function (``count`` first, a time per state), both over
+    :attr:`~symmech.codegen.lower.LoweredFunction.arguments` and ``out``."""
+    ptr = ctypes.c_void_p
+    symbol = getattr(lib, prefix + spec.name)
+    kinds = [ctypes.c_double if a == "t" else ptr for a in spec.arguments]
+    single = ctypes.CFUNCTYPE(ctypes.c_int, *kinds, ptr)(ctypes.cast(symbol, ptr).value or 0)
+    batch = getattr(lib, prefix + spec.name + "_batch")
+    batch.argtypes = [ctypes.c_long, *([ptr] * len(spec.arguments)), ptr]
+    batch.restype = ctypes.c_long
+    return single, batch
 
 
 def c_raw(
@@ -155,79 +216,40 @@ def c_raw(
     """The general caller of a generated C function, and (for a function of the state and
     the parameters only) a fast single-state caller.
 
-    A single state is copied into per-thread float64 buffers whose addresses are taken once,
-    and the function is called through a prototype of plain addresses: no ctypes array
-    conversion and no address lookup per call (``ndarray.ctypes`` costs about a
-    microsecond, as much as a small generated function).
+    A single state is copied into per-thread float64 buffers, one per argument of
+    :attr:`~symmech.codegen.lower.LoweredFunction.arguments` and one for ``out``, whose
+    addresses are taken once, and the function is called through a prototype of plain
+    addresses: no ctypes array conversion and no address lookup per call
+    (``ndarray.ctypes`` costs about a microsecond, as much as a small generated function).
     """
-    symbol = getattr(lib, prefix + spec.name)
-    batch = getattr(lib, prefix + spec.name + "_batch")
-    ptr, dbl = ctypes.c_void_p, ctypes.c_double
-    nstate = len(spec.state)
-    single = ctypes.CFUNCTYPE(
-        ctypes.c_int,
-        *(
-            [ptr] * nstate
-            + ([ptr] if spec.takes_parameters else [])
-            + ([dbl] if spec.takes_time else [])
-            + ([ptr] if spec.takes_inputs else [])
-            + [ptr]
-        ),
-    )(ctypes.cast(symbol, ctypes.c_void_p).value or 0)
-    batch.argtypes = (
-        [ctypes.c_long]
-        + [ptr] * nstate
-        + ([ptr] if spec.takes_parameters else [])
-        + ([ptr] if spec.takes_time else [])
-        + ([ptr] if spec.takes_inputs else [])
-        + [ptr]
-    )
-    batch.restype = ctypes.c_long
+    single, batch = _prototypes(lib, prefix, spec)
+    names = spec.arguments
+    sizes = spec.argument_sizes(n, n_parameters, n_inputs)
     out_shape = spec.out_shape
-    out_size = spec.out_size
-    sizes = [2 * n if s == "y" else n for s in spec.state]
     local = threading.local()
 
-    def parameters_hold(p: np.ndarray) -> bool:
-        """Whether one parameter vector is finite and within its declared ranges."""
-        values = p.tolist()
-        return all(math.isfinite(values[r.index]) and r.holds_value(values[r.index]) for r in rules)
-
-    def fast_buffers() -> tuple[list[np.ndarray], list[int]]:
-        """Per-thread buffers of the fast path, in the order of the function's arguments."""
-        arrays = [np.zeros(k) for k in sizes]
-        if spec.takes_parameters:
-            arrays.append(np.zeros(max(n_parameters, 1)))
-        arrays.append(np.zeros(out_shape if out_shape else (1,)))
-        return arrays, [a.ctypes.data for a in arrays]
-
     def buffers() -> tuple[list[np.ndarray], list[int]]:
-        """Per-thread buffers for one state (state arrays, p, u, out) and their addresses
-        (ctypes releases the GIL during the call, so threads must not share them)."""
+        """This thread's buffers (ctypes releases the GIL during the call, so threads must
+        not share them): one per array argument (a placeholder for ``t``), then ``out``;
+        and their addresses."""
         b = getattr(local, "buffers", None)
         if b is None:
-            arrays = [np.zeros(k) for k in sizes]
-            arrays += [np.zeros(max(n_parameters, 1)), np.zeros(max(n_inputs, 1))]
+            arrays = [np.zeros(max(k, 1)) for k in sizes]
             arrays.append(np.zeros(out_shape if out_shape else (1,)))
             b = local.buffers = (arrays, [a.ctypes.data for a in arrays])
         return b
 
-    def call_single(state, p, t, u) -> np.ndarray:
+    def call_single(values: Sequence[Any]) -> np.ndarray:
+        """One state: ``values`` in the order of the arguments."""
         arrays, addresses = buffers()
         args: list = []
-        for i, a in enumerate(state):
-            arrays[i][:] = a
-            args.append(addresses[i])
-        if spec.takes_parameters:
-            arrays[-3][:] = p
-            args.append(addresses[-3])
-        if spec.takes_time:
-            args.append(float(t))
-        if spec.takes_inputs:
-            arrays[-2][:] = u
-            args.append(addresses[-2])
-        args.append(addresses[-1])
-        status = single(*args)
+        for name, value, buffer, address in zip(names, values, arrays, addresses, strict=False):
+            if name == "t":
+                args.append(float(value))
+            else:
+                buffer[:] = value
+                args.append(address)
+        status = single(*args, addresses[-1])
         if status:
             raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
         return arrays[-1].reshape(out_shape).copy()
@@ -237,23 +259,19 @@ def c_raw(
         # what the fast path accepts: float64 (or int64) vectors of the right length, lists
         # or tuples of that length; anything else goes the general way
         checks = [(k, (k,)) for k in sizes]
-        if spec.takes_parameters:
-            checks.append((n_parameters, (n_parameters,)))
+        where_p = names.index("p") if spec.takes_parameters else -1
 
         def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
             args = _plain_arguments(state, params, spec.takes_parameters, checks)
             if args is None:
                 return None
-            try:
-                arrays, addresses = local.fast
-            except AttributeError:
-                arrays, addresses = local.fast = fast_buffers()
+            arrays, addresses = buffers()
             try:
                 for buffer, a in zip(arrays, args, strict=False):
                     buffer[:] = a
             except OverflowError:
                 return None  # an int beyond float64: the general path explains
-            if spec.takes_parameters and not parameters_hold(arrays[len(sizes)]):
+            if where_p >= 0 and not _parameters_hold(rules, arrays[where_p]):
                 return None  # the general path names the parameter
             status = single(*addresses)
             if status:
@@ -266,53 +284,53 @@ def c_raw(
                 f"{spec.name}: the C backend shares one parameter vector across a batch;"
                 f" got params of shape {p.shape}"
             )
-        if (
-            all(a.ndim == 1 for a in state)
-            and (t is None or t.ndim == 0)
-            and (u is None or u.ndim == 1)
-        ):
-            return call_single(state, p, t, u)
-        parts = [a.shape[:-1] for a in state]
-        if t is not None:
-            parts.append(t.shape)
-        if u is not None:
-            parts.append(u.shape[:-1])
-        lead = np.broadcast_shapes(*parts)
-        count = int(np.prod(lead))
-        arrays = [
-            np.ascontiguousarray(np.broadcast_to(a, (*lead, k)).reshape(count, k))
-            for a, k in zip(state, sizes, strict=True)
+        values = _by_name(spec, state, p, t, u)
+        leads = [
+            v.shape if a == "t" else v.shape[:-1]
+            for a, v in zip(names, values, strict=True)
+            if a != "p"
         ]
-        args = [count, *[a.ctypes.data for a in arrays]]
-        keep = list(arrays)
-        if spec.takes_parameters:
-            args.append(p.ctypes.data)
-        if spec.takes_time:
-            tt = np.ascontiguousarray(np.broadcast_to(t, lead).reshape(count))
-            keep.append(tt)
-            args.append(tt.ctypes.data)
-        if spec.takes_inputs:
-            uu = np.ascontiguousarray(
-                np.broadcast_to(u, (*lead, n_inputs)).reshape(count, n_inputs)
-            )
-            keep.append(uu)
-            args.append(uu.ctypes.data)
-        out = np.empty((count, out_size))
-        args.append(out.ctypes.data)
-        first = batch(*args)
-        if first:
-            # re-run the failing state alone to learn why
-            i = first - 1
-            try:
-                call_single(
-                    [a[i] for a in arrays],
-                    p,
-                    tt[i] if spec.takes_time else None,
-                    uu[i] if spec.takes_inputs else None,
-                )
-            except NumericalError as exc:
-                raise _failed(spec.name, i, str(exc).split(": ", 1)[1]) from None
-            raise _failed(spec.name, i, "failed in the batch call only")
-        return out.reshape((*lead, *out_shape))
+        lead = np.broadcast_shapes(*leads)
+        if lead == ():
+            return call_single(values)
+        return _batch(batch, call_single, spec, sizes, values, lead)
 
     return call, fast
+
+
+def _batch(
+    batch: Any,
+    call_single: Callable[[Sequence[Any]], np.ndarray],
+    spec: LoweredFunction,
+    sizes: Sequence[int],
+    values: Sequence[Any],
+    lead: tuple[int, ...],
+) -> np.ndarray:
+    """The batch function over the states of shape ``lead`` (the arguments broadcast and
+    made contiguous, p shared); a failing state is run alone to learn why."""
+    names = spec.arguments
+    count = int(np.prod(lead))
+    per_state = [
+        v
+        if a == "p"
+        else np.ascontiguousarray(np.broadcast_to(v, lead).reshape(count))
+        if a == "t"
+        else np.ascontiguousarray(np.broadcast_to(v, (*lead, k)).reshape(count, k))
+        for a, v, k in zip(names, values, sizes, strict=True)
+    ]
+    out = np.empty((count, spec.out_size))
+    first = batch(count, *[a.ctypes.data for a in per_state], out.ctypes.data)
+    if first:
+        i = first - 1
+        try:
+            call_single([v if a == "p" else v[i] for a, v in zip(names, per_state, strict=True)])
+        except NumericalError as exc:
+            raise _failed(spec.name, i, str(exc).split(": ", 1)[1]) from None
+        raise _failed(spec.name, i, "failed in the batch call only")
+    return out.reshape((*lead, *spec.out_shape))
+
+
+def _parameters_hold(rules: Sequence[ParameterRule], p: np.ndarray) -> bool:
+    """Whether one parameter vector is finite and within its declared ranges."""
+    values = p.tolist()
+    return all(math.isfinite(values[r.index]) and r.holds_value(values[r.index]) for r in rules)

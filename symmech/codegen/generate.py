@@ -228,7 +228,7 @@ def generate(
             functions=[
                 {
                     "name": f.name,
-                    "sizes": [2 * plan.n if s == "y" else plan.n for s in f.state],
+                    "sizes": f.argument_sizes(plan.n, 0, 0)[: len(f.state)],
                     "parameters": len(plan.parameters) if f.takes_parameters else 0,
                     "dims": list(f.out_shape),
                 }

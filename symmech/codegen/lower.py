@@ -144,11 +144,20 @@ class LoweredFunction:
 
     @property
     def arguments(self) -> tuple[str, ...]:
-        """The argument names in order: the state arrays, then p, t, u if taken."""
+        """The argument names in order: the state arrays, then p, t, u if taken (``out``
+        follows in C).  The one description of a generated function's argument list: the C
+        and NumPy signatures, the batch loops, the CPython extension and the callers of a
+        loaded module (:mod:`symmech.codegen.callers`) are all built from it."""
         extra = (
             ("p",) * self.takes_parameters + ("t",) * self.takes_time + ("u",) * self.takes_inputs
         )
         return (*self.state, *extra)
+
+    def argument_sizes(self, n: int, n_parameters: int, n_inputs: int) -> tuple[int, ...]:
+        """The length of each of :attr:`arguments` for one state (0 for the scalar ``t``):
+        ``y`` 2n, ``q`` and ``v`` n, ``p`` and ``u`` their counts."""
+        size = {"y": 2 * n, "q": n, "v": n, "p": n_parameters, "t": 0, "u": n_inputs}
+        return tuple(size[a] for a in self.arguments)
 
 
 # ---------------------------------------------------------------------- operation counts
@@ -492,7 +501,7 @@ def lower(
             cost += f" + {callee.solve_flops} flops"
     scaled = f.kind == "impact" and not plan.moving_walls[f.wall_index or 0]
     scalar_body = None
-    if scalar is not None and not (takes_t or takes_u or scaled):
+    if scalar is not None and not (takes_t or takes_u):
         scalar_body = _scalar_body(
             f, plan.n, unpack, replacements, where, final, program, check, table, scalar, callee
         )

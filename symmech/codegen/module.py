@@ -4,7 +4,10 @@
 or the functions of the imported NumPy module) and gives both backends one API.  A C
 function of the state and the parameters called for one state goes through a CPython
 extension compiled next to the library (template ``c/python_module.c.jinja``: about half
-a microsecond of overhead), batches and everything else through ctypes:
+a microsecond of overhead), batches and everything else through ctypes; a mapping of
+parameters whose keys are exactly their names, and a time given to a function that does
+not read it, take that route too.  :meth:`SceneModule.bind` binds the parameters once
+(:mod:`symmech.codegen.bound`) for callers that evaluate at the same parameters many times:
 
 >>> import symmech as sm, numpy as np
 >>> from symmech.examples import carnot_3_7
@@ -53,6 +56,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import sympy as sp
 
+from symmech.codegen.bound import BoundModule
 from symmech.codegen.build import (
     DEFAULT_FLAGS,
     cache_dir,
@@ -60,16 +64,29 @@ from symmech.codegen.build import (
     load_library,
     trusted_file,
 )
-from symmech.codegen.callers import Fast, NumericalError, Raw, c_raw, numpy_fast, numpy_raw
+from symmech.codegen.callers import (
+    PLAIN_TIMES,
+    Fast,
+    NumericalError,
+    Raw,
+    c_raw,
+    numpy_fast,
+    numpy_raw,
+)
+from symmech.codegen.extension import build_extension, extension_source
 from symmech.codegen.plan import CodegenError
-from symmech.codegen.runtime_checks import ParameterRule, check_parameters, real_array
-from symmech.errors import SymmechError
+from symmech.codegen.runtime_checks import (
+    ParameterRule,
+    check_parameters,
+    named_columns,
+    real_array,
+)
 from symmech.files import write_text_atomic
 
 if TYPE_CHECKING:
     from symmech.codegen.generate import GeneratedCode
 
-__all__ = ["NumericalError", "SceneModule", "load_generated"]
+__all__ = ["NumericalError", "SceneModule", "extension_source", "load_generated"]
 
 #: A state or time argument: anything NumPy converts to float64 (checked on the way in).
 ArrayLike = object
@@ -144,7 +161,7 @@ class SceneModule:
         if params is None:
             raise CodegenError(f"params required: {list(self.parameters)}")
         if isinstance(params, Mapping):
-            p = _named_columns(params, self.parameters, {}, "params")
+            p = named_columns(params, self.parameters, {}, "params")
         else:
             p = real_array(params, "params")
         if p.shape[-1:] != (k,):
@@ -153,6 +170,25 @@ class SceneModule:
             )
         check_parameters(self._rules, p, NumericalError, "params")
         return np.ascontiguousarray(p)
+
+    def _listed(self, params: dict) -> object:
+        """A dict of parameters as the list of its values in the order of
+        :attr:`parameters` when its keys are exactly their names (the fast path then checks
+        the values), else the dict itself (for the general path to convert or explain)."""
+        names = self.parameters
+        if len(params) != len(names):
+            return params
+        try:
+            return [params[name] for name in names]
+        except KeyError:
+            return params
+
+    def bind(self, params: Params = None) -> BoundModule:
+        """The generated functions with ``params`` bound: converted and checked once (the
+        errors of a call with these parameters), then each function is an attribute taking
+        only its state arrays, ``bound.rhs(y)``, that goes straight to the compiled
+        function for one plain state (see :class:`~symmech.codegen.bound.BoundModule`)."""
+        return BoundModule(self, params)
 
     def _inputs(self, inputs: object) -> np.ndarray:
         """The inputs u as float64 (..., k): a sequence in :attr:`inputs` order or a mapping
@@ -164,7 +200,7 @@ class SceneModule:
                         f"scene {self.code.scene_name!r} has no run-time inputs; got {inputs!r}"
                     )
                 return np.zeros(0)
-            return _named_columns(inputs, self.inputs, self._input_aliases, "inputs")
+            return named_columns(inputs, self.inputs, self._input_aliases, "inputs")
         return self._state(inputs, len(self.inputs), "inputs")
 
     def _state(self, value: object, size: int, what: str) -> np.ndarray:
@@ -215,8 +251,10 @@ class SceneModule:
     ) -> np.ndarray:
         """Call the generated function ``name`` with its state arrays (q, v, or y)."""
         fast = self._fast.get(name)
-        if fast is not None and t is None and inputs is None:
-            out = fast(state, params)
+        if fast is not None and inputs is None and (t is None or type(t) in PLAIN_TIMES):
+            # the plain one-state case (a time given to a function of the state and the
+            # parameters only is a real number, as the general path would check)
+            out = fast(state, self._listed(params) if type(params) is dict else params)
             if out is not None:
                 return out
         spec = self._spec.get(name)
@@ -420,43 +458,6 @@ def input_name(atom: sp.Basic) -> str:
     return str(atom)
 
 
-def _key_name(key: object, aliases: Mapping[str, str], what: str) -> str:
-    """The name a mapping key stands for: a string, a Symbol, or an input's sympy object."""
-    if isinstance(key, sp.Symbol):
-        name = key.name
-    elif isinstance(key, sp.Basic):
-        name = str(key)
-    elif isinstance(key, str):
-        name = key
-    else:
-        raise CodegenError(f"{what}: key {key!r} is not a name")
-    return aliases.get(name, name)
-
-
-def _named_columns(
-    values: Mapping, names: Sequence[str], aliases: Mapping[str, str], what: str
-) -> np.ndarray:
-    """``{name: array}`` as one float64 array (..., len(names)) in the order of ``names``;
-    the arrays broadcast against each other."""
-    given: dict[str, object] = {}
-    for key, val in values.items():
-        name = _key_name(key, aliases, what)
-        if name in given:
-            raise CodegenError(f"{what}: {name!r} is given twice")
-        given[name] = val
-    missing = [p for p in names if p not in given]
-    extra = sorted(set(given) - set(names))
-    if missing or extra:
-        raise CodegenError(f"{what}: missing {missing}, unknown {extra}; expected {list(names)}")
-    columns = [real_array(given[p], f"{what}[{p!r}]") for p in names]
-    try:
-        columns = list(np.broadcast_arrays(*columns))
-    except ValueError:
-        shapes = {p: c.shape for p, c in zip(names, columns, strict=True)}
-        raise CodegenError(f"{what}: the values' shapes do not broadcast: {shapes}") from None
-    return np.stack(columns, axis=-1)
-
-
 def _import_numpy_module(code: GeneratedCode, folder: Path):
     text = code.files[f"{code.stem}.py"]
     key = hashlib.sha256(text.encode()).hexdigest()[:16]
@@ -476,72 +477,6 @@ def _import_numpy_module(code: GeneratedCode, folder: Path):
     spec.loader.exec_module(module)
     sys.modules[name] = module
     return module, path
-
-
-def extension_source(code: GeneratedCode, module: str) -> str:
-    """The C source of the CPython extension ``module`` of ``code``: its
-    :attr:`~symmech.codegen.generate.GeneratedCode.extension` with the module name
-    defined."""
-    return f"#define SYMMECH_EXT_MODULE {module}\n" + code.extension
-
-
-def _extension(
-    code: GeneratedCode,
-    compiler: str | None,
-    flags: Sequence[str],
-    cache: str | Path | None,
-) -> tuple[Any, str]:
-    """The CPython extension of ``code`` (see :func:`extension_source`) and a
-    description; or (None, why not)."""
-    import importlib.machinery
-    import sysconfig
-
-    from symmech.codegen.build import extension_includes, find_compiler, library_key
-
-    includes, missing = extension_includes()
-    if missing:
-        return None, f"ctypes (no CPython extension: {missing})"
-    if not code.extension:
-        return None, "ctypes (no function of the state and parameters only)"
-    cc = find_compiler(compiler)
-    # the key covers the extension's own source (its template may change while the
-    # library's sources do not), rendered with a placeholder module name
-    digest = hashlib.sha256(
-        "\0".join(
-            [
-                library_key(cc, flags, code.files),
-                extension_source(code, "_symmech_ext"),
-                sys.version,
-                np.__version__,
-                *includes,
-            ]
-        ).encode()
-    )
-    name = f"_symmech_ext_{digest.hexdigest()[:20]}"
-    sources = {**code.files, f"{name}.c": extension_source(code, name)}
-    suffix = sysconfig.get_config_var("EXT_SUFFIX") or ".so"
-    try:
-        path = compile_library(
-            sources,
-            compiler=compiler,
-            flags=[*flags, *(f"-I{d}" for d in includes)],
-            cache=cache,
-            filename=f"{name}{suffix}",
-        )
-        if name in sys.modules:
-            ext = sys.modules[name]
-        else:
-            loader = importlib.machinery.ExtensionFileLoader(name, str(path))
-            spec = importlib.util.spec_from_file_location(name, path, loader=loader)
-            assert spec is not None
-            ext = importlib.util.module_from_spec(spec)
-            loader.exec_module(ext)
-            sys.modules[name] = ext
-    except (SymmechError, ImportError, OSError) as exc:
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        return None, f"ctypes (the CPython extension failed: {first})"
-    ext._configure(NumericalError)
-    return ext, f"CPython extension {path.name} (one state), ctypes (batches)"
 
 
 def load_generated(
@@ -593,7 +528,7 @@ def load_generated(
     fast = {name: quick for name, (_, quick) in callers.items() if quick is not None}
     how = "ctypes (extension=False)"
     if extension:
-        ext, how = _extension(code, compiler, kwargs.get("flags", DEFAULT_FLAGS), cache)
+        ext, how = build_extension(code, compiler, kwargs.get("flags", DEFAULT_FLAGS), cache)
         if ext is not None:
             fast.update({name: getattr(ext, name) for name in fast if hasattr(ext, name)})
     module = SceneModule(code, raw, library, fast)

@@ -433,7 +433,7 @@ def build_plan(
             raise CodegenError(
                 f"strategy 'closed_form': {exc}; strategy 'linear_solve' solves the same"
                 " equations in the generated code"
-            ) from None
+            ) from exc  # the budget that stopped it, as data (benchmarks report it)
         note = f"strategy auto: {exc}; linear_solve is used instead of closed forms"
     return _build(scene, "linear_solve", *options, fallback=note)
 

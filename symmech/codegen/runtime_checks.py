@@ -38,7 +38,13 @@ import sympy as sp
 
 from symmech.codegen.plan import CodegenError
 
-__all__ = ["ParameterRule", "check_parameters", "parameter_rules", "real_array"]
+__all__ = [
+    "ParameterRule",
+    "check_parameters",
+    "named_columns",
+    "parameter_rules",
+    "real_array",
+]
 
 
 @dataclass(frozen=True)
@@ -249,3 +255,40 @@ def real_array(value: object, what: str) -> np.ndarray:
     raise CodegenError(
         f"{what}: {kinds.get(dkind, 'values')} of dtype {a.dtype} are not real numbers"
     )
+
+
+def _key_name(key: object, aliases: Mapping[str, str], what: str) -> str:
+    """The name a mapping key stands for: a string, a Symbol, or an input's sympy object."""
+    if isinstance(key, sp.Symbol):
+        name = key.name
+    elif isinstance(key, sp.Basic):
+        name = str(key)
+    elif isinstance(key, str):
+        name = key
+    else:
+        raise CodegenError(f"{what}: key {key!r} is not a name")
+    return aliases.get(name, name)
+
+
+def named_columns(
+    values: Mapping, names: Sequence[str], aliases: Mapping[str, str], what: str
+) -> np.ndarray:
+    """``{name: array}`` as one float64 array (..., len(names)) in the order of ``names``;
+    the arrays broadcast against each other."""
+    given: dict[str, object] = {}
+    for key, val in values.items():
+        name = _key_name(key, aliases, what)
+        if name in given:
+            raise CodegenError(f"{what}: {name!r} is given twice")
+        given[name] = val
+    missing = [p for p in names if p not in given]
+    extra = sorted(set(given) - set(names))
+    if missing or extra:
+        raise CodegenError(f"{what}: missing {missing}, unknown {extra}; expected {list(names)}")
+    columns = [real_array(given[p], f"{what}[{p!r}]") for p in names]
+    try:
+        columns = list(np.broadcast_arrays(*columns))
+    except ValueError:
+        shapes = {p: c.shape for p, c in zip(names, columns, strict=True)}
+        raise CodegenError(f"{what}: the values' shapes do not broadcast: {shapes}") from None
+    return np.stack(columns, axis=-1)

@@ -4,11 +4,12 @@ interface in mpmath)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
+from symmech.codegen.bound import BoundModule
 from symmech.codegen.module import NumericalError, SceneModule
 from symmech.declaration.symbols import t as TIME
 from symmech.simulate.system import (
@@ -72,7 +73,12 @@ class Functions:
         #: The mode the flow integrates (``()``: free flight; the walls held).
         self.mode: Mode = FREE
         self._p: dict[Mode, np.ndarray | None] = {}
-        self._takes_t: dict[tuple[Mode, str], bool] = {}
+        #: (mode, function name) -> the function at the bound parameters, and whether it
+        #: reads t (the loop calls a few functions thousands of times: bound once, the
+        #: parameters are not converted and checked at every call)
+        self._bound: dict[tuple[Mode, str], tuple[Callable[..., np.ndarray], bool]] = {}
+        self._bound_modules: dict[Mode, BoundModule] = {}
+        self._walls: dict[tuple[str, int], str] = {}
 
     # -- plumbing -------------------------------------------------------------------------
     def _module(self, mode: Mode) -> SceneModule | None:
@@ -86,8 +92,6 @@ class Functions:
             self._p[mode] = (
                 np.array([self._params[k] for k in names], dtype=np.float64) if names else None
             )
-            for f in mod.code.functions:
-                self._takes_t[(mode, f.name)] = f.takes_time
         return self._p[mode]
 
     def locked(self, mode: Mode) -> bool:
@@ -95,14 +99,27 @@ class Functions:
         return bool(mode) and self.system.contact(mode) is None
 
     def _call(self, mode: Mode, name: str, t: float, *state: np.ndarray) -> np.ndarray:
-        p = self._pvec(mode)
-        mod = self._module(mode)
-        assert mod is not None
-        tt = t if self._takes_t.get((mode, name), False) else None
-        return mod.call(name, *state, params=p, t=tt)
+        key = (mode, name)
+        entry = self._bound.get(key)
+        if entry is None:
+            mod = self._module(mode)
+            assert mod is not None
+            bound = self._bound_modules.get(mode)
+            if bound is None:
+                bound = self._bound_modules[mode] = mod.bind(self._pvec(mode))
+            spec = {f.name: f for f in mod.code.functions}.get(name)
+            if spec is None:  # not generated: the module's call explains
+                return mod.call(name, *state, params=self._pvec(mode))
+            entry = self._bound[key] = (getattr(bound, name), spec.takes_time)
+        fn, takes_t = entry
+        return fn(*state, t=t) if takes_t else fn(*state)
 
     def _wall_name(self, kind: str, wall: int) -> str:
-        return self.system.free._wall_function(kind, wall)
+        key = (kind, wall)
+        name = self._walls.get(key)
+        if name is None:
+            name = self._walls[key] = self.system.free._wall_function(kind, wall)
+        return name
 
     # -- the evaluations --------------------------------------------------------------------
     def rhs(self, mode: Mode, t: float, y: np.ndarray) -> np.ndarray:

@@ -378,3 +378,54 @@ def impact_wall(q, v, p):
     e = numpy.frexp(numpy.where((scale > 0.0) & numpy.isfinite(scale), scale, 1.0))[1]
     out = _unscaled_impact_wall(q, numpy.ldexp(v, -e), p)
     return numpy.ldexp(out, e)
+
+
+def _one_unscaled_impact_wall(q, v, p):
+    """impact_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    q_theta = q[2]
+    v_xdot = v[0]
+    v_ydot = v[1]
+    v_thetadot = v[2]
+    p_I = p[0]
+    p_a = p[1]
+    p_b = p[2]
+    p_m = p[3]
+    tmp0 = math.sin(q_theta)
+    tmp1 = (tmp0*tmp0)
+    tmp2 = math.cos(q_theta)
+    tmp3 = (tmp2*tmp2)
+    tmp4 = p_a + p_b
+    tmp5 = (tmp4*tmp4)
+    tmp6 = p_a - p_b
+    tmp7 = (tmp6*tmp6)
+    tmp8 = p_I*(p_a*p_a)*tmp3 + p_I*(p_b*p_b)*tmp1
+    tmp9 = (1.0/(p_m*tmp1*tmp3*tmp5*tmp7 + tmp8))
+    tmp10 = v_thetadot*tmp9
+    tmp11 = 2.0*tmp0*tmp2*tmp4*tmp6*math.hypot(p_a*tmp2, p_b*tmp0)
+    tmp12 = -p_m*tmp1*tmp3*tmp5*tmp7 + tmp8
+    tmp13 = tmp9*v_xdot
+    out = [0.0] * 3
+    out[0] = p_I*tmp10*tmp11 - tmp12*tmp13
+    out[1] = v_ydot
+    out[2] = p_m*tmp11*tmp13 + tmp10*tmp12
+    M0_0 = p_m
+    M1_1 = p_m
+    M2_2 = p_I
+    _require_finite(M0_0, M1_1, M2_2)
+    if not M0_0 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M1_1 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M2_2 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    return out
+
+
+def _one_impact_wall(q, v, p):
+    """impact_wall for one state, scaled as impact_wall is (the same exponent e, the
+    same exact powers of two), on plain floats; returns a list."""
+    scale = max(abs(x) for x in v)
+    e = math.frexp(scale if scale > 0.0 and math.isfinite(scale) else 1.0)[1]
+    out = _one_unscaled_impact_wall(q, [math.ldexp(x, -e) for x in v], p)
+    return [math.ldexp(x, e) for x in out]

@@ -9,7 +9,8 @@
  * Each entry point takes (state, p): state a tuple of the state arrays, p the parameter
  * vector.  An argument is read in place when it is a float64 (native byte order),
  * C-contiguous, aligned 1-D NumPy array of the right length, or copied when it is a list
- * or tuple of that many Python floats or ints; the parameters must pass
+ * or tuple of that many Python floats (or float subclasses such as numpy.float64) or ints;
+ * the parameters must pass
  * check_parameters (finite, within their declared ranges), also when the function
  * does not read them (p = None is then accepted too).  Anything else returns None, and the caller takes its
  * general path (which converts, broadcasts, or explains what is wrong).  A failure of the
@@ -40,7 +41,7 @@ static int sm_vector(PyObject *obj, Py_ssize_t size, double *buf, const double *
         PyObject **items = PySequence_Fast_ITEMS(obj);
         for (Py_ssize_t i = 0; i < size; ++i) {
             PyObject *x = items[i];
-            if (PyFloat_CheckExact(x)) {
+            if (PyFloat_Check(x)) {  /* a float or a subclass (numpy.float64); not bool */
                 buf[i] = PyFloat_AS_DOUBLE(x);
             } else if (PyLong_CheckExact(x)) {
                 buf[i] = PyLong_AsDouble(x);

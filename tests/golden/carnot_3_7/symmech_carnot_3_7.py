@@ -354,3 +354,44 @@ def impact_rough_wall(q, v, p):
     e = numpy.frexp(numpy.where((scale > 0.0) & numpy.isfinite(scale), scale, 1.0))[1]
     out = _unscaled_impact_rough_wall(q, numpy.ldexp(v, -e), p)
     return numpy.ldexp(out, e)
+
+
+def _one_unscaled_impact_rough_wall(q, v, p):
+    """impact_rough_wall for one state: the same operations in the same order on plain floats
+    (the state and p as lists), with math in place of numpy; returns a list."""
+    v_xdot = v[0]
+    v_ydot = v[1]
+    v_thetadot = v[2]
+    p_R = p[0]
+    p_alpha = p[1]
+    p_k = p[2]
+    p_m = p[3]
+    tmp0 = (p_R*p_R)
+    tmp1 = (p_k*p_k)
+    tmp2 = (1.0/(tmp0 + tmp1))
+    tmp3 = tmp2*v_xdot
+    tmp4 = v_thetadot*tmp1*tmp2
+    out = [0.0] * 3
+    out[0] = p_R*tmp4 + tmp0*tmp3
+    out[1] = -p_alpha*v_ydot
+    out[2] = p_R*tmp3 + tmp4
+    M0_0 = p_m
+    M1_1 = p_m
+    M2_2 = p_m*tmp1
+    _require_finite(M0_0, M1_1, M2_2)
+    if not M0_0 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M1_1 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    if not M2_2 > 0.0:
+        raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
+    return out
+
+
+def _one_impact_rough_wall(q, v, p):
+    """impact_rough_wall for one state, scaled as impact_rough_wall is (the same exponent e, the
+    same exact powers of two), on plain floats; returns a list."""
+    scale = max(abs(x) for x in v)
+    e = math.frexp(scale if scale > 0.0 and math.isfinite(scale) else 1.0)[1]
+    out = _one_unscaled_impact_rough_wall(q, [math.ldexp(x, -e) for x in v], p)
+    return [math.ldexp(x, e) for x in out]
