@@ -132,7 +132,8 @@ class CompiledGait(GaitFunctions):
             self._modules[mode] = module
             names = module.parameters
             self._p[mode] = np.array([self.values[p] for p in names]) if names else None
-        self._calls: dict[tuple[str, str], Callable[[np.ndarray], np.ndarray]] = {}
+        self._calls: dict[tuple[str, str], Callable[..., np.ndarray]] = {}
+        self._bound: dict[str, Any] = {}
 
     def with_parameters(self, params: Mapping[str, float]) -> CompiledGait:
         """The same generated code at other parameter values (nothing is generated or
@@ -145,19 +146,19 @@ class CompiledGait(GaitFunctions):
             for mode, m in self._modules.items()
         }
         other._calls = {}
+        other._bound = {}
         return other
 
-    def _fn(self, mode: str, name: str) -> Callable[[np.ndarray], np.ndarray]:
+    def _fn(self, mode: str, name: str) -> Callable[..., np.ndarray]:
+        """``name`` of ``mode``'s module bound to the parameters (checked once:
+        :meth:`symmech.codegen.module.SceneModule.bind`)."""
         key = (mode, name)
         fn = self._calls.get(key)
         if fn is None:
-            module, p = self._modules[mode], self._p[mode]
-            call = module.call
-
-            def fn(*state: np.ndarray, _n: str = name) -> np.ndarray:
-                return call(_n, *state, params=p)
-
-            self._calls[key] = fn
+            bound = self._bound.get(mode)
+            if bound is None:
+                bound = self._bound[mode] = self._modules[mode].bind(self._p[mode])
+            fn = self._calls[key] = bound._bound[name]
         return fn
 
     def array(self, values: Any) -> np.ndarray:
