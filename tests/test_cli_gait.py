@@ -53,3 +53,16 @@ def test_gait_refusals_are_one_line(tmp_path: Path):
     assert_one_line_error(
         symmech("gait", "rimless_wheel", "--continue", "zeta=0:1", cwd=tmp_path), "--continue"
     )
+
+
+def test_gait_reads_a_gait_file(tmp_path: Path):
+    from symmech.gait.gaitfile import BUILTIN_DIR
+
+    for f in ("hopper.gait.toml", "hopper_flight.toml", "hopper_stance.toml"):
+        (tmp_path / f).write_text((BUILTIN_DIR / f).read_text())
+    proc = symmech("gait", "hopper.gait.toml", "--routes", "c", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "gait hopper:" in proc.stdout
+    assert "-0.1576880663" in proc.stdout  # the hopper's multiplier (test_gait.py's gait)
+    (tmp_path / "hopper.gait.toml").write_text("format = 1\nname = 'hopper'\n")
+    assert_one_line_error(symmech("gait", "hopper.gait.toml", cwd=tmp_path), "modes")

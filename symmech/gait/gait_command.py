@@ -1,6 +1,6 @@
 """``symmech gait NAME``: a built-in gait's fixed point and multipliers by each route.
 
-``symmech gait NAME [--param k=v ...] [--routes c,numpy,fd,mp,mp-cd] [--digits 30]``
+``symmech gait NAME|FILE [--param k=v ...] [--routes c,numpy,fd,mp,mp-cd] [--digits 30]``
 prints the table of :func:`symmech.gait.report.solve_routes` (fixed point, multipliers,
 error against the mpmath reference, seconds) and the cost of the multipliers in C against
 one stride.  ``--continue gamma=a:b [--steps N] [--plot FILE]`` follows the gait from
@@ -28,7 +28,9 @@ __all__ = ["add_command", "run_gait_command"]
 def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
     """The ``gait`` sub-command's parser."""
     p = sub.add_parser("gait", parents=[common], help="a gait's fixed point and multipliers")
-    p.add_argument("name", metavar="NAME", help=f"a built-in gait: {', '.join(GAITS)}")
+    p.add_argument(
+        "name", metavar="NAME", help=f"a built-in gait ({', '.join(GAITS)}) or a gait file"
+    )
     p.add_argument("--param", action="append", default=[], metavar="K=V", help="set a parameter")
     p.add_argument(
         "--routes",
@@ -44,9 +46,24 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
 
 
 def _case(name: str) -> GaitCase:
-    if name not in GAITS:
-        raise SymmechError(f"unknown gait {name!r}; built-in gaits: {', '.join(GAITS)}")
-    return GAITS[name]
+    """A built-in gait by name, or a gait file (``*.toml``, :mod:`symmech.gait.gaitfile`)."""
+    if name in GAITS:
+        return GAITS[name]
+    if name.endswith(".toml"):
+        from symmech.gait.gaitfile import read_gait
+
+        gf = read_gait(name)
+        return GaitCase(
+            gf.gait.name,
+            lambda: gf.gait,
+            gf.defaults,
+            gf.guess,
+            gf.description or f"gait file {name}",
+            section=gf.section,
+        )
+    raise SymmechError(
+        f"unknown gait {name!r}; built-in gaits: {', '.join(GAITS)}, or a gait file (.toml)"
+    )
 
 
 def _parameters(case: GaitCase, items: list[str]) -> dict[str, float]:
