@@ -1,0 +1,144 @@
+"""Hostile and careless input, round 3 (issue 26), the second half: symbolic budgets that
+hold in any thread, metric definiteness, large sparse impact maps, sweep stores, output
+paths, ``from_mechanics`` and the command line's refusals.  Each test uses the input that
+used to hang, crash or pass silently."""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+import mpmath
+import pytest
+import sympy as sp
+from test_cli import symmech
+
+import symmech as sm
+from symmech import codegen
+from symmech.algebra import budget
+from symmech.codegen.kinds import forcing_notes
+
+# ---------------------------------------------------------------------------------------
+# 1. expansion budgets: a velocity inside a power
+
+#: 145 bytes: ``symmech derive`` never finished (forcing_notes expanded the power: 8
+#: operations under NOTE_EXPAND_OPS = 100, C(70, 6) = 131,115,985 terms).
+POWER_FORCE = """format = 1
+name = "p"
+coordinates = ["x", "y", "z"]
+metric = ["1", "1", "1"]
+potential = "0"
+forces = ["(x+y+z+xdot+ydot+zdot+1)**64", "0", "0"]
+"""
+
+
+def _finishes(work, seconds: float) -> object:
+    """Run ``work()`` in a daemon thread; fail if it is still running after ``seconds``
+    (the hang this guards against never returns), else return its result or raise its
+    exception."""
+    out: dict[str, object] = {}
+
+    def run() -> None:
+        try:
+            out["value"] = work()
+        except BaseException as exc:  # handed to the test thread
+            out["error"] = exc
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    assert not thread.is_alive(), f"still running after {seconds} s"
+    if "error" in out:
+        raise out["error"]  # type: ignore[misc]
+    return out.get("value")
+
+
+def test_a_power_of_a_sum_is_over_every_expanding_budget_measured_in_operations():
+    x, y, zd = sp.symbols("x y zdot")
+    power = (x + y + zd + 1) ** 64
+    assert sp.count_ops(power) <= budget.LIGHT_SIMPLIFY_OPS  # what the old gates measured
+    assert budget.expanded_terms(power)[0] == sp.binomial(64 + 3, 3)  # C(67, 3) = 47,905
+    assert not budget.affordable(power, budget.LIGHT_SIMPLIFY_OPS)
+    assert budget.expand_affordable(power) is power  # skipped, not expanded
+    small = (x + y + zd + 1) ** 3
+    assert budget.affordable(small, budget.LIGHT_SIMPLIFY_OPS)
+    assert budget.expand_affordable(small) == sp.expand(small)
+
+
+def test_forcing_notes_do_not_expand_a_power_of_velocities():
+    v = sp.symbols("xdot ydot zdot")
+    x, y, z = sp.symbols("x y z")
+    f = sp.Matrix([(x + y + z + sum(v) + 1) ** 64, 0, v[0] * v[1]])
+    notes = _finishes(lambda: forcing_notes(f, v, False), 20)
+    # entry 0 counts all 6 pairs (a bound), entry 2 its one pair: 18 - 7 = 11 zeros
+    assert notes[0].startswith("forcing: at least 11 of the 18 Christoffel symbols")
+    assert "entries [1]" in notes[1]
+
+
+def test_code_generation_of_a_velocity_inside_a_power_finishes():
+    """The generated forcing is the power itself, evaluated right (against mpmath)."""
+    scene = sm.reads_scene(POWER_FORCE).scene
+    code = _finishes(lambda: codegen.generate(scene, "c"), 60)
+    assert any("at least 12 of the 18" in note for note in code.omitted)
+    state = [0.1, -0.2, 0.05, 0.01, 0.02, -0.03]
+    f = code.load().forcing(state[:3], state[3:], {})
+    assert f[0] == pytest.approx(float(mpmath.mpf("1.0") * (1 + mpmath.fsum(state)) ** 64))
+    assert list(f[1:]) == [0.0, 0.0]
+
+
+# ---------------------------------------------------------------------------------------
+# 2. a deadline that holds off the main thread
+
+#: A dense trigonometric 3 x 3 metric with two curved walls: its closed forms need about
+#: 9 s; the gcds of the adjugate route are single long library calls.
+SLOW_CLOSED_FORMS = """coordinates = ["x", "y", "z"]
+metric = [["3 + sin(x)", "cos(x - y)", "sin(y*z)/7"], ["cos(x - y)", "4 + cos(z)", "x/9"],
+          ["sin(y*z)/7", "x/9", "5 + sin(x + z)"]]
+potential = "cos(x) + sin(y)*z"
+[[walls]]
+psi = "x + sin(y) + z**2 + 2"
+[[walls]]
+psi = "y - cos(x*z) + 3"
+"""
+
+
+def test_the_time_budget_stops_a_derivation_in_a_worker_thread(monkeypatch):
+    """SIGALRM reaches only the main thread: in a worker thread a derivation with a 2 s
+    budget ran 9.9 s (and a 10 s one past 100 s).  The deadline is checked cooperatively
+    in the symbolic loops, so the thread stops and falls back to linear_solve.  Measured
+    in the thread's own CPU time (a loaded machine gives it less, never more)."""
+    monkeypatch.setattr(budget, "CLOSED_FORM_SECONDS", 0.3)
+    scene = sm.reads_scene(SLOW_CLOSED_FORMS).scene
+
+    def work() -> tuple[object, float]:
+        start = time.thread_time()
+        code = codegen.generate(scene, "c")
+        return code, time.thread_time() - start
+
+    assert threading.current_thread() is threading.main_thread()
+    code, cpu = _finishes(work, 60)  # type: ignore[misc]
+    assert any("over its budget CLOSED_FORM_SECONDS" in note for note in code.omitted)
+    assert cpu < 3.0, cpu  # 0.3 s of closed forms and the linear_solve route
+
+
+def test_a_deadline_is_checked_at_every_expanding_gate():
+    """The gates of the expanding steps are checkpoints: a stage past its deadline stops
+    at the next one, whatever thread it runs in."""
+    x = sp.Symbol("x")
+    caught: list[BaseException] = []
+
+    def work() -> None:
+        with budget.time_limit("gate", 0.01):
+            time.sleep(0.05)
+            try:
+                budget.affordable(x + 1, 10)
+            except budget.BudgetExceeded as exc:
+                caught.append(exc)
+            try:
+                budget.expand_affordable(x + 1)
+            except budget.BudgetExceeded as exc:
+                caught.append(exc)
+
+    _finishes(work, 10)
+    assert [exc.stage for exc in caught] == ["gate", "gate"]
