@@ -5,6 +5,7 @@ used to hang, crash or pass silently."""
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 from pathlib import Path
@@ -12,12 +13,13 @@ from pathlib import Path
 import mpmath
 import pytest
 import sympy as sp
-from test_cli import symmech
+from test_cli import assert_one_line_error, symmech
 
 import symmech as sm
 from symmech import codegen
 from symmech.algebra import budget
 from symmech.codegen.kinds import forcing_notes
+from symmech.simulate import SimulationError
 
 # ---------------------------------------------------------------------------------------
 # 1. expansion budgets: a velocity inside a power
@@ -142,3 +144,96 @@ def test_a_deadline_is_checked_at_every_expanding_gate():
 
     _finishes(work, 10)
     assert [exc.stage for exc in caught] == ["gate", "gate"]
+
+
+# ---------------------------------------------------------------------------------------
+# 5. a sweep store with a link, a folder or a corrupt part
+
+
+def _store_sweep(store: Path):
+    from symmech.examples import bouncing_ball
+
+    grid = {"alpha": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]}
+    p = {"m": 1.0, "g": 9.81}
+    return sm.sweep(bouncing_ball(), grid, 1.0, q0=[1.0], v0=[0.0], params=p, chunk=2, store=store)
+
+
+def test_a_corrupt_part_of_a_sweep_store_is_recomputed_with_a_warning(tmp_path: Path):
+    """A truncated part gave a raw ArrowInvalid and the sweep could not resume."""
+    pytest.importorskip("pyarrow")
+    store = tmp_path / "out.parquet"
+    first = _store_sweep(store)
+    part = store / "part-00000001.parquet"
+    part.write_bytes(part.read_bytes()[:100])  # truncated
+    (store / "part-00000002.parquet").write_bytes(b"PAR1 not a table PAR1")
+    with pytest.warns(sm.SymmechWarning) as caught:
+        again = _store_sweep(store)
+    said = " ".join(str(w.message) for w in caught)
+    assert "part-00000001.parquet cannot be read" in said
+    assert "part-00000002.parquet cannot be read" in said
+    assert again.equals(first)
+    assert not list(store.glob(".*.tmp"))
+
+
+@pytest.mark.parametrize("kind", ["link", "folder", "manifest link"])
+def test_a_link_or_a_folder_in_a_sweep_store_is_refused_by_name(tmp_path: Path, kind: str):
+    pytest.importorskip("pyarrow")
+    store = tmp_path / "out.parquet"
+    _store_sweep(store)
+    elsewhere = tmp_path / "elsewhere.parquet"
+    name = "_sweep.json" if kind == "manifest link" else "part-00000002.parquet"
+    planted = store / name
+    if kind == "folder":
+        planted.unlink()
+        planted.mkdir()
+    else:
+        elsewhere.write_bytes(planted.read_bytes())
+        planted.unlink()
+        planted.symlink_to(elsewhere)
+    what = "a symbolic link" if "link" in kind else "not a regular file"
+    with pytest.raises(SimulationError, match=rf"{name} is {what}; a sweep store holds only"):
+        _store_sweep(store)
+
+
+# ---------------------------------------------------------------------------------------
+# 8. every refusal on the command line is one line with exit 2
+
+
+@pytest.mark.parametrize(
+    ("address", "why"),
+    [
+        ("not a url", "missing port number"),
+        ("tcp://", "missing port number"),
+        ("tcp://host:99999", "port 99999 is not in 1..65535"),
+        ("inproc://x", "don't know how to extract host and port"),
+        ("tls://host:1", "cannot connect \\(TypeError: TLS expects"),
+    ],
+)
+def test_a_scheduler_that_is_not_an_address_is_bad_input(tmp_path: Path, address: str, why):
+    """'not a url' ended as "internal error: ValueError", exit 3."""
+    pytest.importorskip("distributed")
+    (tmp_path / "grid.csv").write_text("q0[0]\n1.0\n")
+    proc = symmech(
+        "sweep", "bouncing_ball", "--grid", "grid.csv", "--out", "o.parquet", "--t-end", "1",
+        "--v0", "0", "--scheduler", address, "--quiet", cwd=tmp_path,
+    )  # fmt: skip
+    line = assert_one_line_error(proc, f"--scheduler {address!r}")
+    assert re.search(why, line), line
+    assert not (tmp_path / "o.parquet").exists()
+
+
+# ---------------------------------------------------------------------------------------
+# 9. SciPy with a right-hand side that is not finite at the start
+
+
+@pytest.mark.parametrize("backend", ["numpy", "scipy"])
+def test_a_rhs_not_finite_at_the_start_fails_at_once_on_every_backend(backend):
+    """SciPy's first step became nan and its step loop never ended (C and NumPy failed at
+    once); now the same check as the loops: status failed, naming t."""
+    y = sm.coordinates(["y"])[0]
+    scene = sm.Scene(
+        [y], metric=[[1]], forces=[1 / y], walls=[sm.Wall(y + 1, restitution=sp.Rational(1, 2))]
+    )
+    res = _finishes(lambda: sm.simulate(scene, [0.0], [0.0], 1.0, backend=backend), 60)
+    assert res.status == "failed"  # type: ignore[union-attr]
+    assert res.message == "the right-hand side is not finite at t = 0.0"  # type: ignore[union-attr]
