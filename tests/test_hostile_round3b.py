@@ -237,3 +237,66 @@ def test_a_rhs_not_finite_at_the_start_fails_at_once_on_every_backend(backend):
     res = _finishes(lambda: sm.simulate(scene, [0.0], [0.0], 1.0, backend=backend), 60)
     assert res.status == "failed"  # type: ignore[union-attr]
     assert res.message == "the right-hand side is not finite at t = 0.0"  # type: ignore[union-attr]
+
+
+# ---------------------------------------------------------------------------------------
+# 7. from_mechanics: each refusal a SceneError with its real reason
+
+
+def _mechanics_models():
+    me = pytest.importorskip("sympy.physics.mechanics")
+    q, u = me.dynamicsymbols("q u")
+    m, k = sp.symbols("m k")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+
+    def point(velocity):
+        P = O.locatenew("P", q * N.x)
+        P.set_vel(N, velocity * N.x)
+        return P
+
+    def no_speeds():
+        point(q.diff())
+        return me.KanesMethod(N, q_ind=[q], u_ind=[], kd_eqs=[])
+
+    def no_kinematics():
+        point(u)
+        return me.KanesMethod(N, q_ind=[q], u_ind=[u])
+
+    def never_formed():
+        point(u)
+        return me.KanesMethod(N, q_ind=[q], u_ind=[u], kd_eqs=[q.diff() - u])
+
+    def force_on_a_point_without_velocity():
+        L = me.Lagrangian(N, me.Particle("p", point(q.diff()), m))
+        return me.LagrangesMethod(L, [q], forcelist=[(me.Point("Q"), k * N.x)], frame=N)
+
+    def quartic():
+        qd = q.diff()
+        return me.LagrangesMethod(m * qd**2 / 2 - 5 * qd**4 / 4 - k * q**2 / 2, [q])
+
+    def root_of_velocity():
+        qd = q.diff()
+        return me.LagrangesMethod(-m * sp.sqrt(1 - qd**2) - k * q**2 / 2, [q])
+
+    return {
+        no_speeds: r"the KanesMethod has no generalized speeds \(u_ind=\[\]\)",
+        no_kinematics: r"the KanesMethod has no kinematic differential equations \(kd_eqs=\)",
+        never_formed: r"its kanes_equations\(bodies, loads\) were never formed",
+        force_on_a_point_without_velocity: (
+            r"the load on point Q: its velocity in the frame N is not defined"
+        ),
+        quartic: r"terms of degree 4 in the velocities \(-5\*Derivative\(q\(t\), t\)\*\*4/4\)",
+        root_of_velocity: r"terms not polynomial in the velocities",
+    }
+
+
+def test_from_mechanics_refuses_each_model_with_its_reason():
+    """Before: AttributeError (no speeds), ValueError (a point without velocity), "metric
+    singular" / "no bodies" (never formed), "terms linear in the velocities
+    (25*q'**4/4)" (a quartic Lagrangian: the Hessian mixed its terms)."""
+    for build, why in _mechanics_models().items():
+        with pytest.raises(sm.SceneError, match=why) as info:
+            sm.Scene.from_mechanics(build())
+        assert "\n" not in str(info.value), build.__name__
