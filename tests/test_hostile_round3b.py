@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import re
 import threading
+import warnings
 import time
 from pathlib import Path
 
@@ -300,3 +301,173 @@ def test_from_mechanics_refuses_each_model_with_its_reason():
         with pytest.raises(sm.SceneError, match=why) as info:
             sm.Scene.from_mechanics(build())
         assert "\n" not in str(info.value), build.__name__
+
+
+# ---------------------------------------------------------------------------------------
+# 4. an impact on a few coordinates of a large scene
+
+
+def _full_route(monkeypatch) -> None:
+    """The construction on every velocity (the route before the restriction)."""
+    import importlib
+
+    ip = importlib.import_module("symmech.impacts.impact_projectors")
+    monkeypatch.setattr(ip, "_touched", lambda g, mu, A: list(range(g.rows)))
+
+
+def _blocky_case():
+    """Five velocities: a coupled block (0, 1) the wall and the impulsive constraint
+    touch, a block (2, 3) joined by a permanent constraint, and 4 alone."""
+    x = sp.symbols("x0:5", real=True)
+    m = sp.symbols("m0:5", positive=True)
+    g = sp.Matrix(
+        [
+            [m[0], m[1] * sp.cos(x[1]) / 2, 0, 0, 0],
+            [m[1] * sp.cos(x[1]) / 2, m[1], 0, 0, 0],
+            [0, 0, m[2] + x[3] ** 2, 0, 0],
+            [0, 0, 0, m[3], 0],
+            [0, 0, 0, 0, m[4]],
+        ]
+    )
+    mu = sp.Matrix([[0, 0, 1, -x[2], 0]])
+    dpsi = sp.Matrix([[1, sp.sin(x[1]), 0, 0, 0]])
+    nu = sp.Matrix([[0, 1, 0, 0, 0]])
+    return g, mu, dpsi, nu
+
+
+_FIELDS = ("Y", "PY", "C", "K", "beta", "QQ", "PP", "T", "Qt", "Pt", "N", "P", "Q")
+
+
+@pytest.mark.parametrize("with_nu", [False, True])
+def test_an_impact_is_built_on_the_velocities_it_touches_and_equals_the_full_route(
+    monkeypatch, with_nu
+):
+    from symmech.impacts.impact_projectors import _touched, impact_projectors
+
+    g, mu, dpsi, nu = _blocky_case()
+    if not with_nu:
+        nu = sp.zeros(0, 5)
+    assert _touched(g, mu, dpsi.col_join(nu)) == [0, 1]
+    fast = impact_projectors(g, mu, dpsi, nu, several=True)
+    with monkeypatch.context() as patch:
+        _full_route(patch)
+        full = impact_projectors(g, mu, dpsi, nu, several=True)
+    for name in (*_FIELDS, "PYK", "Kbeta"):
+        a, b = getattr(fast, name), getattr(full, name)
+        assert a.shape == b.shape, name
+        assert (a - b).applyfunc(sp.simplify) == sp.zeros(*a.shape), name
+    for a, b in zip(fast.T_walls + fast.Kbeta_walls, full.T_walls + full.Kbeta_walls, strict=True):
+        assert (a - b).applyfunc(sp.simplify) == sp.zeros(*a.shape)
+    assert fast.PP[2:, 2:] == sp.eye(3) and fast.QQ[2:, :] == sp.zeros(3, 5)
+
+
+def test_a_wall_linked_by_a_constraint_touches_the_whole_linked_block():
+    from symmech.impacts.impact_projectors import _touched
+
+    g, mu, _, _ = _blocky_case()
+    assert _touched(g, mu, sp.Matrix([[0, 0, 0, 1, 0]])) == [2, 3]
+    assert _touched(g, mu, sp.Matrix([[0, 0, 0, 0, 1]])) == [4]
+
+
+def test_an_impact_on_one_coordinate_of_a_200_coordinate_diagonal_scene():
+    """scene.impact_map(0) never finished (a dense adjugate of the 201 x 201 bordered
+    matrix): now the 1 x 1 block; v+ = v- but for v0+ = -alpha v0- (Newton)."""
+    n = 200
+    q = sm.coordinates([f"x{i}" for i in range(n)])
+    m = sp.symbols(f"m0:{n}", positive=True)
+    wall = sm.Wall(q[0] + 1, restitution=sp.Rational(1, 2), name="w")
+    potential = sum(qi**2 for qi in q)
+    scene = sm.Scene(q, metric=sp.diag(*m), potential=potential, walls=[wall], name="big")
+    impact = _finishes(lambda: scene.impact_map(0), 120)
+    expected = sp.eye(n)
+    expected[0, 0] = -sp.Rational(1, 2)
+    assert sp.Matrix(impact.matrix) == expected  # type: ignore[union-attr]
+
+
+# ---------------------------------------------------------------------------------------
+# 3. metric definiteness: exact roots first, sums of squares proved
+
+
+def test_a_metric_negative_past_an_exact_root_far_away_is_refused_with_the_root():
+    """diag(1, 1 - exp(x - 1000)) was accepted with an UndecidedWarning: no sample and
+    no search goes near x = 1000."""
+    x, y = sm.coordinates(["x", "y"])
+    with pytest.raises(sm.SceneError) as info:
+        sm.Scene([x, y], metric=[[1, 0], [0, 1 - sp.exp(x - 1000)]])
+    said = str(info.value)
+    assert "not positive definite at the point {x=1001}" in said
+    assert "has the exact real root x = 1000 and is < 0 past it" in said
+    assert "found from the exact real roots" in said
+    # a leading minor: D_2 = 2 - exp(x/500) has the root 500 log 2
+    with pytest.raises(sm.SceneError, match=r"D_2 = 2 - exp\(x/500\) has the exact real root x"):
+        sm.Scene([x, y], metric=[[2, sp.exp(x / 1000)], [sp.exp(x / 1000), 1]])
+
+
+def test_a_metric_nonnegative_through_its_roots_is_not_refused():
+    """(1 - u/2)^2 with u = exp(x - 1000) touches 0 at its root and stays >= 0."""
+    x, y = sm.coordinates(["x", "y"])
+    u = sp.exp(x - 1000)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sm.UndecidedWarning)
+        sm.Scene([x, y], metric=[[1, 0], [0, 1 - u + u**2 / 4]])
+
+
+def _two_link_pendulum_on_a_cart():
+    """sympy.physics.mechanics' 2-link pendulum on a cart (point masses, LagrangesMethod):
+    its metric holds cos(q1) cos(q2) + sin(q1) sin(q2)."""
+    me = pytest.importorskip("sympy.physics.mechanics")
+    q = me.dynamicsymbols("q0:3")
+    m = sp.symbols("m0:3")
+    l = sp.symbols("l0:2")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P0", q[0] * N.x)
+    P.set_vel(N, q[0].diff() * N.x)
+    particles = [me.Particle("p0", P, m[0])]
+    for i in range(2):
+        A = N.orientnew(f"A{i}", "Axis", [q[i + 1], N.z])
+        A.set_ang_vel(N, q[i + 1].diff() * N.z)
+        nxt = P.locatenew(f"P{i + 1}", -l[i] * A.y)
+        nxt.v2pt_theory(P, N, A)
+        P = nxt
+        particles.append(me.Particle(f"p{i + 1}", P, m[i + 1]))
+    lm = me.LagrangesMethod(me.Lagrangian(N, *particles), q, frame=N)
+    lm.form_lagranges_equations()
+    return lm
+
+
+def test_a_pendulum_on_a_cart_imported_from_mechanics_is_proven_definite():
+    """It warned 'positive definiteness is undecided ... may be indefinite elsewhere':
+    its minors, linearised (cos(q1 - q2) one term), have positive interval bounds."""
+    model = _two_link_pendulum_on_a_cart()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sm.UndecidedWarning)
+        scene = sm.Scene.from_mechanics(model)
+    assert len(scene.coordinates) == 3
+
+
+def test_a_sum_of_squares_with_unsigned_weights_is_proven_at_the_sampled_values():
+    """T a sum of squares whose weights are symbols without a sign: positive at every
+    sampled point, so g is a Gram matrix there (before: undecided, the interval Cholesky
+    of the 2-link pendulum on a cart proves nothing)."""
+    from symmech.declaration.definiteness import definiteness
+
+    x, a, b = sm.coordinates(["x", "a", "b"])
+    xd, ad, bd = sm.velocities([x, a, b])
+    m0, m1, m2, l0, l1 = sp.symbols("m0 m1 m2 l0 l1")
+    vx1, vy1 = xd + l0 * sp.cos(a) * ad, l0 * sp.sin(a) * ad
+    vx2, vy2 = vx1 + l1 * sp.cos(b) * bd, vy1 + l1 * sp.sin(b) * bd
+    T = m0 * xd**2 / 2 + m1 * (vx1**2 + vy1**2) / 2 + m2 * (vx2**2 + vy2**2) / 2
+    v = sp.Matrix([xd, ad, bd])
+    G = sp.hessian(T, list(v)).applyfunc(sp.expand)
+    points = [
+        {m0: sp.Rational(3, 2), m1: sp.Rational(1, 3), m2: 2, l0: 1, l1: sp.Rational(1, 2),
+         x: 0, a: sp.Rational(1, 5), b: -1},
+        {m0: 1, m1: 5, m2: sp.Rational(1, 10), l0: 3, l1: 2, x: 1, a: 2, b: 3},
+    ]  # fmt: skip
+    verdict = definiteness(G, [x, a, b], points, kinetic_energy=T)
+    assert verdict.status == "proven"
+    assert verdict.detail.endswith("at the sampled parameter values")
+    points[1][m2] = -1  # a negative weight: no proof from T
+    assert not definiteness(G, [x, a, b], points, kinetic_energy=T).detail.endswith("values")

@@ -61,8 +61,11 @@ __all__ = [
     "IMPACT_GCD_TERMS",
     "IMPACT_TERMS",
     "LIGHT_SIMPLIFY_OPS",
+    "LINEARIZE_OPS",
     "NOTE_EXPAND_TERMS",
     "QUADRATIC_SIMPLIFY_OPS",
+    "ROOTS_OPS",
+    "ROOTS_SECONDS",
     "SINGULAR_FACTOR_OPS",
     "STABLE_ENTRY_OPS",
     "STABLE_FACTOR_GENERATORS",
@@ -111,6 +114,18 @@ FULL_SIMPLIFY_OPS = 150
 #: :func:`expanded_terms`; see :func:`affordable`): ``(x + y + zdot + 1)**64`` is 8
 #: operations and 10^8 terms.
 EXPAND_TERMS = 20_000
+
+# -- declaration: definiteness of the metric (symmech.declaration.definiteness) -----------
+#: operations, skip: a diagonal entry or leading minor of the metric in one coordinate that
+#: is not a polynomial has its real roots solved exactly (``sympy.solveset``) only when it
+#: has at most this many operations ...
+ROOTS_OPS = 60
+#: seconds, skip: ... and within this time (then the search from the samples decides).
+ROOTS_SECONDS = 2.0
+#: operations, skip: a leading minor of the metric whose interval bound proves nothing is
+#: linearised (products of sin and cos to sums, ``sympy.simplify.fu.TR8``) and bounded
+#: again only when it has at most this many operations.
+LINEARIZE_OPS = 600
 
 # -- impacts (symmech.impacts) -----------------------------------------------------------
 #: terms, skip: the adjugate route gives up when a polynomial it forms is larger (the
