@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import re
 import threading
-import warnings
 import time
+import warnings
 from pathlib import Path
 
 import mpmath
