@@ -471,3 +471,24 @@ def test_a_sum_of_squares_with_unsigned_weights_is_proven_at_the_sampled_values(
     assert verdict.detail.endswith("at the sampled parameter values")
     points[1][m2] = -1  # a negative weight: no proof from T
     assert not definiteness(G, [x, a, b], points, kinetic_energy=T).detail.endswith("values")
+
+
+# ---------------------------------------------------------------------------------------
+# beyond the issue: refusals found by the round's own hostile inputs
+
+
+@pytest.mark.parametrize(
+    ("args", "said"),
+    [
+        (("--plot", "x.evil"), "--plot 'x.evil': matplotlib writes no 'evil' images"),
+        (("--plot", "nowhere/x.png"), "--plot 'nowhere/x.png': the folder"),
+        (("--repeats", "0"), "--repeats: expected a number >= 1, got 0"),
+    ],
+)
+def test_bench_refuses_a_plot_it_cannot_write_before_running(tmp_path: Path, args, said):
+    """--plot x.evil ran the whole benchmark, then ended "internal error: ValueError"
+    (exit 3); --repeats 0 ran with no repeat."""
+    pytest.importorskip("matplotlib")
+    proc = symmech("bench", "bouncing_ball", "--no-baseline", *args, "--quiet", cwd=tmp_path)
+    assert_one_line_error(proc, said)
+    assert "|" not in proc.stdout  # refused before the table

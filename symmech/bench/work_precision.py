@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 import symmech.simulate as simulate_pkg
+from symmech.errors import SymmechError
 from symmech.bench.baseline import baseline_run, prepare
 from symmech.bench.cases import Case, bouncing_ball_state, bouncing_ball_times
 from symmech.files import write_atomic
@@ -253,6 +254,29 @@ def plot(case: Case, table: Sequence[Row], path: str) -> None:
     # through the one writer of output files: a link at ``path`` is replaced, not followed
     write_atomic(path, lambda fh: fig.savefig(fh, format=_image_format(path), dpi=120))
     plt.close(fig)
+
+
+def check_plot_path(path: str) -> None:
+    """Refuse, before anything runs, a plot path matplotlib cannot write: an image format
+    it does not know (a raw ValueError after the whole benchmark, exit 3, before), or a
+    folder that does not exist."""
+    try:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+    except ImportError as exc:
+        raise SymmechError(
+            f"--plot needs matplotlib ({exc}): pip install 'symmech[plot]'"
+        ) from None
+    known = FigureCanvasAgg(Figure()).get_supported_filetypes()
+    kind = _image_format(path)
+    if kind not in known:
+        raise SymmechError(
+            f"--plot {path!r}: matplotlib writes no {kind!r} images; name a file ending in"
+            f" one of {', '.join('.' + k for k in sorted(known))}"
+        )
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise SymmechError(f"--plot {path!r}: the folder {folder!r} does not exist")
 
 
 def _image_format(path: str) -> str:
