@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 
 import symmech.simulate as simulate_pkg
-from symmech.errors import SymmechError
 from symmech.bench.baseline import baseline_run, prepare
 from symmech.bench.cases import Case, bouncing_ball_state, bouncing_ball_times
+from symmech.errors import SymmechError
 from symmech.files import write_atomic
 from symmech.simulate.reference import as_float, reference_run
 
