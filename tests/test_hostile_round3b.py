@@ -398,6 +398,9 @@ def test_a_metric_negative_past_an_exact_root_far_away_is_refused_with_the_root(
     assert "not positive definite at the point {x=1001}" in said
     assert "has the exact real root x = 1000 and is < 0 past it" in said
     assert "found from the exact real roots" in said
+    # two coordinates: along x with y at its sampled value
+    with pytest.raises(sm.SceneError, match=r"at the point \{x=1001, y=.*past it"):
+        sm.Scene([x, y], metric=[[1, 0], [0, 1 - sp.exp(x - 1000) - sp.exp(y - 1000)]])
     # a leading minor: D_2 = 2 - exp(x/500) has the root 500 log 2
     with pytest.raises(sm.SceneError, match=r"D_2 = 2 - exp\(x/500\) has the exact real root x"):
         sm.Scene([x, y], metric=[[2, sp.exp(x / 1000)], [sp.exp(x / 1000), 1]])

@@ -55,7 +55,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -300,8 +300,8 @@ def _negative_past_roots(
     lo = 0 if coordinate.is_nonnegative else -math.inf
     tests = [values[0] - 1, *((a + b) / 2 for a, b in itertools.pairwise(values)), values[-1] + 1]
     for t in tests:
-        for digits in (3, 6, 12, 30):  # the shortest decimal point where it is negative
-            short = sp.Rational(str(sp.N(t, digits)))
+        # the shortest decimal where it is negative: an integer, then 3, 6, 12 places
+        for short in [sp.Rational(round(t * 10**d), 10**d) for d in (0, 3, 6, 12)] + [t]:
             if short < lo:
                 continue
             value = sp.N(entry.xreplace({coordinate: short}), 30)
@@ -490,6 +490,12 @@ def _diagonal(
                 return _refuted_past_roots(
                     G, f"diagonal entry [{i},{i}] = {_short(e)}", own[0], past, sample
                 )
+        elif len(own) > 1 and not (at_sample.free_symbols - set(own)):
+            for c, part in _slices(at_sample, own, sample):
+                past = _past(part, c)
+                if past is not None:
+                    what = f"diagonal entry [{i},{i}] = {_short(e)}"
+                    return _refuted_past_roots(G, what, c, past, sample)
         mine = [c for c in q if c in e.free_symbols]
         value, where = _compass(_entry(e), _float_point(sample), mine, budget)
         if value < 0:
@@ -521,18 +527,13 @@ def _full(
     for k, minor in enumerate(minors):
         at_sample = minor.xreplace(dict(fixed))
         own = [c for c in q if c in at_sample.free_symbols]
-        if len(own) != 1 or at_sample.free_symbols - set(own):
+        if not own or at_sample.free_symbols - set(own):
             continue
-        exact = _exact_sign(at_sample, own[0])
-        if exact is None:
-            past = _negative_past_roots(at_sample, own[0])
-        elif exact[0] == "negative":
-            past = (exact[1], [])
-        else:
-            continue
-        if past is not None:
-            label = f"the leading minor D_{k + 1} = {_short(minor)}"
-            return _refuted_past_roots(G, label, own[0], past, sample)
+        for c, part in _slices(at_sample, own, sample):
+            past = _past(part, c)
+            if past is not None:
+                label = f"the leading minor D_{k + 1} = {_short(minor)}"
+                return _refuted_past_roots(G, label, c, past, sample)
     value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q, budget)
     if value < 0:
         confirmed = _confirm(G, where, sample, q)
@@ -545,6 +546,27 @@ def _full(
         " is indefinite"
     )
     return None
+
+
+def _slices(
+    e: sp.Expr, own: Sequence[sp.Symbol], sample: Mapping
+) -> Iterator[tuple[sp.Symbol, sp.Expr]]:
+    """``e`` as a function of each of its coordinates ``own`` in turn, the others at their
+    sampled values (a line through the sample along that coordinate)."""
+    for c in own:
+        others = {d: sp.Rational(sample[d]) for d in own if d != c and d in sample}
+        if len(others) == len(own) - 1:
+            yield c, e.xreplace(others)
+
+
+def _past(part: sp.Expr, c: sp.Symbol) -> tuple[sp.Rational, list[sp.Expr]] | None:
+    """A point where ``part`` (a function of the coordinate c alone) is negative, from
+    its exact real roots (a polynomial's, or those solveset finds), with the roots; None
+    when none is found."""
+    exact = _exact_sign(part, c)
+    if exact is None:
+        return _negative_past_roots(part, c)
+    return (exact[1], []) if exact[0] == "negative" else None
 
 
 def _refuted_past_roots(
