@@ -125,6 +125,27 @@ def test_the_time_budget_stops_a_derivation_in_a_worker_thread(monkeypatch):
     assert cpu < 3.0, cpu  # 0.3 s of closed forms and the linear_solve route
 
 
+def test_checks_with_a_time_limit_stay_bounded_in_a_worker_thread():
+    """Stages whose time limit was a signal only: the Carnot residual of a wall under a
+    constraint (x + y + z + 1)**64 ran past 120 s in a thread (2 s on the main thread:
+    it expanded the pre-impact velocities), and exact roots of a trigonometric minor
+    (sympy.solveset) are tried only on a single function of the coordinate."""
+    text = """coordinates = ["x", "y", "z"]
+metric = ["1", "1", "1"]
+constraints = [["(x+y+z+1)**64", "1", "0"]]
+[[walls]]
+psi = "x"
+"""
+
+    def carnot() -> object:
+        return sm.reads_scene(text).scene.impact_map(0).carnot()
+
+    assert _finishes(carnot, 60).holds  # type: ignore[attr-defined]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sm.UndecidedWarning)
+        _finishes(lambda: sm.reads_scene(SLOW_CLOSED_FORMS), 60)
+
+
 def test_a_deadline_is_checked_at_every_expanding_gate():
     """The gates of the expanding steps are checkpoints: a stage past its deadline stops
     at the next one, whatever thread it runs in."""

@@ -255,12 +255,25 @@ def _exact_sign(entry: sp.Expr, coordinate: sp.Symbol) -> tuple[str, sp.Rational
     return "nonneg", None
 
 
+def _one_generator(entry: sp.Expr, coordinate: sp.Symbol) -> bool:
+    """Whether ``entry`` is a polynomial in a single function of ``coordinate``
+    (``exp(x - 1000)``, ``cosh(x/1000)``, ``sin(x)``, ``sqrt(x**2 + 1)``): what solveset
+    inverts directly.  Several (``sin(x)``, ``cos(2 x)``, ``x exp(x)``) can cost it
+    minutes, in a loop no deadline reaches (its own time limit is a signal, main thread
+    only), so they are left to the search."""
+    try:
+        gens = sp.Poly(entry).gens
+    except (sp.PolynomialError, sp.GeneratorsNeeded):
+        return False
+    return len([g for g in gens if g.has(coordinate)]) == 1
+
+
 def _solved_roots(entry: sp.Expr, coordinate: sp.Symbol) -> list[sp.Expr] | None:
     """The real roots of ``entry`` (a function of one real coordinate, not a polynomial)
     that ``sympy.solveset`` finds exactly, sorted; a periodic family contributes its
     members for n = -1, 0, 1.  None when it finds none it can list, or over the budgets
     ROOTS_OPS / ROOTS_SECONDS of :mod:`symmech.algebra.budget`."""
-    if sp.count_ops(entry) > limits.ROOTS_OPS:
+    if sp.count_ops(entry) > limits.ROOTS_OPS or not _one_generator(entry, coordinate):
         return None
     try:
         with limits.time_limit(
