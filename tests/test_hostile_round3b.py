@@ -302,7 +302,28 @@ def _mechanics_models():
         qd = q.diff()
         return me.LagrangesMethod(-m * sp.sqrt(1 - qd**2) - k * q**2 / 2, [q])
 
+    def no_kinetic_energy():
+        return me.LagrangesMethod(-k * q**2 / 2, [q])
+
+    def degenerate_kinetic_energy():
+        q2 = me.dynamicsymbols("q2")
+        return me.LagrangesMethod(m * (q.diff() + q2.diff()) ** 2 / 2, [q, q2])
+
+    def system_for_kane_formed_by_lagrange():
+        u2 = me.dynamicsymbols("u2")
+        rail = me.RigidBody("rail")
+        cart = me.RigidBody("cart", mass=m)
+        system = me.System.from_newtonian(rail)
+        system.add_joints(me.PrismaticJoint("slider", rail, cart, q, u2, joint_axis=rail.x))
+        system.form_eoms(eom_method=me.LagrangesMethod)
+        return system
+
     return {
+        no_kinetic_energy: (
+            r"the Lagrangian does not depend on the velocities \[Derivative\(q\(t\), t\)\]"
+        ),
+        degenerate_kinetic_energy: r"the kinetic energy of the Lagrangian is singular",
+        system_for_kane_formed_by_lagrange: r"written in the speeds \['u2\(t\)'\], not in the",
         no_speeds: r"the KanesMethod has no generalized speeds \(u_ind=\[\]\)",
         no_kinematics: r"the KanesMethod has no kinematic differential equations \(kd_eqs=\)",
         never_formed: r"its kanes_equations\(bodies, loads\) were never formed",

@@ -451,11 +451,38 @@ def _regular_metric(M: sp.Matrix, rows: list[list[sp.Expr]], model: Model) -> sp
     kernel = Vt[sing <= sing[0] * 1e-9] if sing[0] > 0 else Vt
     involved = [w for k, w in enumerate(model.basis) if np.abs(kernel[:, k]).max() > 1e-8]
     where = " on the constraints' kernel" if rows else ""
+    if model.lagrangian is not None:
+        raise SceneError(_singular_lagrangian(model, involved, where))
     raise SceneError(
         f"from_mechanics: the kinetic metric of the model's bodies is singular{where}: no"
         f" body's kinetic energy fixes the velocities {involved} (sympy issue 24887: three"
         " speeds for a particle's orientation); symmech needs a positive definite metric"
         " (give those motions inertia, or leave out the speeds they do not need)"
+    )
+
+
+def _singular_lagrangian(model: Model, involved: list, where: str) -> str:
+    """Why the Hessian of a Lagrangian in the velocities is singular, for the refusal."""
+    L = model.lagrangian
+    missing = [w for w in involved if not L.has(w)]
+    if missing:
+        t = mechanics().dynamicsymbols._t
+        speeds = sorted(
+            {str(d) for d in atoms(L, sp.Function) if d.args == (t,) and d not in model.q},
+        )
+        hint = (
+            f" (it is written in the speeds {speeds}, not in the q_dots: LagrangesMethod"
+            " needs bodies whose velocities are given in the q_dots)"
+            if speeds
+            else ""
+        )
+        return (
+            f"from_mechanics: the Lagrangian does not depend on the velocities {missing}:"
+            f" it has no kinetic energy in them{hint}; symmech needs T positive definite"
+        )
+    return (
+        f"from_mechanics: the kinetic energy of the Lagrangian is singular{where}: it vanishes"
+        f" for a motion of the velocities {involved}; symmech needs T positive definite"
     )
 
 
