@@ -236,7 +236,7 @@ def _restricted(
         nu.extract(list(range(nu.rows)), S) if nu.rows else sp.zeros(0, len(S)),
         level,
         check,
-        sub_permanent,  # type: ignore[arg-type]
+        sub_permanent,
         several,
     )
     P, Q = (sp.Matrix(M) for M in (permanent or permanent_projectors(g, mu, level)))

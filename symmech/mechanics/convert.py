@@ -463,7 +463,7 @@ def _regular_metric(M: sp.Matrix, rows: list[list[sp.Expr]], model: Model) -> sp
 
 def _singular_lagrangian(model: Model, involved: list, where: str) -> str:
     """Why the Hessian of a Lagrangian in the velocities is singular, for the refusal."""
-    L = model.lagrangian
+    L = sp.sympify(model.lagrangian, strict=True)
     missing = [w for w in involved if not L.has(w)]
     if missing:
         t = mechanics().dynamicsymbols._t
