@@ -107,8 +107,8 @@ psi = "y - cos(x*z) + 3"
 
 
 def test_the_time_budget_stops_a_derivation_in_a_worker_thread(monkeypatch):
-    """SIGALRM reaches only the main thread: in a worker thread a derivation with a 2 s
-    budget ran 9.9 s (and a 10 s one past 100 s).  The deadline is checked cooperatively
+    """SIGALRM reaches only the main thread: in a worker thread a derivation with a 0.3 s
+    budget ran 2.5 s (the issue's 10 s one past 100 s).  The deadline is checked cooperatively
     in the symbolic loops, so the thread stops and falls back to linear_solve.  Measured
     in the thread's own CPU time (a loaded machine gives it less, never more)."""
     monkeypatch.setattr(budget, "CLOSED_FORM_SECONDS", 0.3)
@@ -122,7 +122,9 @@ def test_the_time_budget_stops_a_derivation_in_a_worker_thread(monkeypatch):
     assert threading.current_thread() is threading.main_thread()
     code, cpu = _finishes(work, 60)  # type: ignore[misc]
     assert any("over its budget CLOSED_FORM_SECONDS" in note for note in code.omitted)
-    assert cpu < 3.0, cpu  # 0.3 s of closed forms and the linear_solve route
+    # 0.3 s of closed forms, then the linear_solve route: 0.4 s in all; 2.5 s before (the
+    # gcds of the adjugate route ran on to their end)
+    assert cpu < 1.2, cpu
 
 
 def test_checks_with_a_time_limit_stay_bounded_in_a_worker_thread():
