@@ -32,7 +32,7 @@ Commands:
     Run the scene for every row of a grid (:mod:`symmech.sweep.command`).
 ``symmech gait NAME [--routes ...] [--continue P=A:B]``
     A built-in gait's fixed point and multipliers by each route, or their continuation in
-    a parameter (:mod:`symmech.gait.command`).
+    a parameter (:mod:`symmech.gait.gait_command`).
 
 SCENE is a scene file (TOML, :mod:`symmech.scenefile`) or the name of a built-in scene.
 With no command, ``show`` runs on the bouncing ellipse.  Progress (stage and elapsed time)
@@ -70,8 +70,8 @@ from symmech.derivation import MAX_DETAILED_N, Derivation, derivation
 from symmech.errors import SceneError, SymmechError
 from symmech.examples import EXAMPLES, example
 from symmech.files import write_text_atomic
-from symmech.gait.command import add_command as add_gait_command
-from symmech.gait.command import run_gait_command
+from symmech.gait.gait_command import add_command as add_gait_command
+from symmech.gait.gait_command import run_gait_command
 from symmech.scenefile import (
     SceneFile,
     builtin_scene_names,

@@ -7,8 +7,9 @@ itself, never the file it points to).  A reader sees the old file or the new one
 half-written file, and a link planted where a generated file goes is replaced, its target
 untouched.  Used by :meth:`~symmech.codegen.generate.GeneratedCode.write`, the module
 cache of the NumPy backend, ``symmech derive -o`` / ``symmech export -o``,
-:func:`symmech.save_scene`, ``symmech sweep --out FILE.csv`` and ``symmech bench --plot``
-(:func:`write_atomic`, for writers that take a file handle).
+:func:`symmech.save_scene`, ``symmech sweep --out FILE.csv``, the parts and manifest of a
+sweep store (``--out FOLDER.parquet``) and ``symmech bench --plot`` (:func:`write_atomic`,
+for writers that take a file handle).
 """
 
 from __future__ import annotations

@@ -17,6 +17,7 @@ from typing import Any, overload
 
 import sympy as sp
 
+from symmech.algebra.budget import expand_affordable
 from symmech.algebra.simplification import Level, check_level, tidy_matrix
 from symmech.constraints.dynamics import constrained_solution, constraint_rate
 from symmech.constraints.projectors import gradients, gram, projectors, solve_spd
@@ -375,7 +376,9 @@ class Scene:
     def kinetic_energy(self) -> sp.Expr:
         """T = 1/2 v^T M v in the velocity basis."""
         v = sp.Matrix(self.velocities)
-        return self._cached(("T",), lambda: sp.expand((v.T * self._decl.metric * v)[0, 0] / 2))
+        return self._cached(
+            ("T",), lambda: expand_affordable((v.T * self._decl.metric * v)[0, 0] / 2)
+        )
 
     def energy(self) -> sp.Expr:
         """Total energy T + V."""

@@ -20,6 +20,7 @@ SCRIPTS: dict[str, tuple[tuple[str, ...], str]] = {
     "codegen.py": ((), "total run time:"),
     "contacts.py": ((), "| two-wall contact (enter, settle) |"),
     "derive.py": ((), "Kane/sm >= 20 at n = 8 and 16 for both forms of T"),
+    "gait.py": ((), "rimless_wheel    C vs mp"),
     "hostile_checks.py": ((), "ratio"),
     "impacts.py": ((), "3-link cart, tip wall"),
     "mechanics.py": ((), "symmech all functions: the same"),

@@ -48,6 +48,7 @@ __all__ = [
     "CLOSED_FORM_MAX_N",
     "CLOSED_FORM_SECONDS",
     "CLOSED_FORM_TERMS",
+    "EXPAND_TERMS",
     "FIELD_BLOCK_MAX_N",
     "FIELD_DEGREE",
     "FIELD_GCD_TERMS",
@@ -60,8 +61,11 @@ __all__ = [
     "IMPACT_GCD_TERMS",
     "IMPACT_TERMS",
     "LIGHT_SIMPLIFY_OPS",
-    "NOTE_EXPAND_OPS",
+    "LINEARIZE_OPS",
+    "NOTE_EXPAND_TERMS",
     "QUADRATIC_SIMPLIFY_OPS",
+    "ROOTS_OPS",
+    "ROOTS_SECONDS",
     "SINGULAR_FACTOR_OPS",
     "STABLE_ENTRY_OPS",
     "STABLE_FACTOR_GENERATORS",
@@ -70,8 +74,10 @@ __all__ = [
     "ZERO_EXACT_OPS",
     "ZERO_TEST_OPS",
     "BudgetExceeded",
+    "affordable",
     "checkpoint",
     "determinant_terms",
+    "expand_affordable",
     "expanded_terms",
     "propagate_time",
     "remaining",
@@ -101,6 +107,25 @@ FIELD_GCD_TERMS = 400
 LIGHT_SIMPLIFY_OPS = 400
 #: operations, skip: ``sympy.simplify`` of larger expressions (level ``"full"``).
 FULL_SIMPLIFY_OPS = 150
+
+#: terms, skip: every stage budgeted in operations whose step expands (``cancel``,
+#: ``factor``, ``simplify``, the exact zero test, a Pythagorean remainder) also declines an
+#: expression whose expansion may hold more terms than this (bound of
+#: :func:`expanded_terms`; see :func:`affordable`): ``(x + y + zdot + 1)**64`` is 8
+#: operations and 10^8 terms.
+EXPAND_TERMS = 20_000
+
+# -- declaration: definiteness of the metric (symmech.declaration.definiteness) -----------
+#: operations, skip: a diagonal entry or leading minor of the metric in one coordinate that
+#: is not a polynomial has its real roots solved exactly (``sympy.solveset``) only when it
+#: has at most this many operations ...
+ROOTS_OPS = 60
+#: seconds, skip: ... and within this time (then the search from the samples decides).
+ROOTS_SECONDS = 2.0
+#: operations, skip: a leading minor of the metric whose interval bound proves nothing is
+#: linearised (products of sin and cos to sums, ``sympy.simplify.fu.TR8``) and bounded
+#: again only when it has at most this many operations.
+LINEARIZE_OPS = 600
 
 # -- impacts (symmech.impacts) -----------------------------------------------------------
 #: terms, skip: the adjugate route gives up when a polynomial it forms is larger (the
@@ -153,9 +178,12 @@ CLOSED_FORM_TERMS = 500
 #: printing (larger ones keep the form they were derived in).
 STABLE_ENTRY_OPS = 200
 
-#: Operations of a term of the forcing expanded to count its Christoffel symbols for the
-#: ``omitted`` note of generated code; a larger term counts every pair of its velocities.
-NOTE_EXPAND_OPS = 100
+#: terms, skip: a term of the forcing is expanded to count its Christoffel symbols for
+#: the ``omitted`` note of generated code only when its expansion (bound of
+#: :func:`expanded_terms`) has at most this many terms; a larger one counts every pair of
+#: its velocities as present.  Measured in terms, not operations: ``(x + v + 1)**64`` is
+#: a handful of operations and millions of terms.
+NOTE_EXPAND_TERMS = 2_000
 
 
 class BudgetExceeded(SymmechError):
@@ -239,6 +267,28 @@ def expanded_terms(expr: sp.Basic, cap: int = 10**9) -> tuple[int, int]:
     return visit(sp.sympify(expr, strict=True))
 
 
+def affordable(expr: sp.Basic, max_ops: int) -> bool:
+    """True when a step that expands ``expr`` fits both of its budgets: at most ``max_ops``
+    operations (``sympy.count_ops``) and an expansion of at most :data:`EXPAND_TERMS`
+    terms (bound of :func:`expanded_terms`).  The one gate of every operations budget
+    whose step expands: an operation count alone misses a power of a sum.  Also a
+    :func:`checkpoint` of the deadline (every expensive step passes this gate first)."""
+    checkpoint()
+    if sp.count_ops(expr) > max_ops:
+        return False
+    return expanded_terms(expr, EXPAND_TERMS + 1)[0] <= EXPAND_TERMS
+
+
+def expand_affordable(expr: sp.Basic) -> sp.Basic:
+    """``sympy.expand(expr)`` when its expansion may hold at most :data:`EXPAND_TERMS`
+    terms (bound of :func:`expanded_terms`), else ``expr`` as it is (skip): for the
+    expansions that only tidy a result or a message.  Also a :func:`checkpoint`."""
+    checkpoint()
+    if expanded_terms(expr, EXPAND_TERMS + 1)[0] > EXPAND_TERMS:
+        return expr
+    return sp.expand(expr)
+
+
 def _binomial(n: int, k: int, cap: int) -> int:
     """``C(n, k)`` or ``cap`` when it is larger (without forming huge integers)."""
     k = min(k, n - k)
@@ -276,13 +326,25 @@ def checkpoint() -> None:
 
 @contextmanager
 def time_limit(stage: str, seconds: float, budget: str = "CLOSED_FORM_SECONDS") -> Iterator[None]:
-    """Bound the wall-clock time of the block to ``seconds``.
+    """Bound the wall-clock time of the block to ``seconds``: a cooperative deadline.
 
-    Inside the block :func:`checkpoint` raises :class:`BudgetExceeded` once the time is
-    up.  In the main thread, when no other handler owns ``SIGALRM``, a real-time timer
-    also interrupts a single long library call (a sympy ``factor`` or ``cancel`` that
-    would not return): the handler raises the same exception at the next bytecode, and
-    the timer and handler are restored on exit.  Nested limits keep the earlier deadline.
+    The deadline is held in a context variable, so it belongs to the thread (or task)
+    that entered the block, and inside the block :func:`checkpoint` raises
+    :class:`BudgetExceeded` once the time is up.  The symbolic loops check it between
+    their steps: every gate of an expanding step (:func:`affordable`,
+    :func:`expand_affordable`), every entry of the rational-function field
+    (:mod:`symmech.algebra.field`) and of the adjugate route, every Laplace minor and
+    every stable coefficient.  Each step between two checks is bounded by a budget in
+    terms or operations, so the deadline holds in any thread, overshooting by at most one
+    budgeted step.
+
+    In the main thread, when no other handler owns ``SIGALRM``, a real-time timer also
+    interrupts a single long library call that no term budget foresaw (a sympy
+    ``factor`` or ``cancel`` that would not return): the handler raises the same
+    exception at the next bytecode, and the timer and handler are restored on exit.  It
+    is kept because it costs nothing and bounds what the checks cannot (the inside of one
+    library call); it is a second line, never the only one.  Nested limits keep the
+    earlier deadline.
     """
     now = time.monotonic()
     outer = _DEADLINE.get()

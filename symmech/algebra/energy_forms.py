@@ -128,6 +128,6 @@ def _clean(e: sp.Expr, simplify: bool) -> sp.Expr:
             or any(p.exp.is_Rational and not p.exp.is_Integer for p in e.atoms(sp.Pow))
         )
     ):
-        if sp.count_ops(e) <= limits.QUADRATIC_SIMPLIFY_OPS:
+        if limits.affordable(e, limits.QUADRATIC_SIMPLIFY_OPS):
             e = sp.simplify(e)
     return sp.factor_terms(e)

@@ -253,6 +253,7 @@ class RationalField:
     def normal(self, x: Frac) -> Frac:
         """x with numerator and denominator reduced and cancelled (exact; canonical for
         polynomials)."""
+        limits.checkpoint()  # one gcd per entry: the deadline holds between them
         if not self.pairs or not x:
             return x
         a, b = self.reduce(x.numer), self.reduce(x.denom)
@@ -272,6 +273,7 @@ class RationalField:
         of a metric recur by symmetry, and a sparse one is mostly 0)."""
         hit = self._elements.get(e)
         if hit is None:
+            limits.checkpoint()
             hit = self._elements[e] = self.normal(self.K.from_sympy(self._in(e)))
         return hit
 

@@ -52,6 +52,8 @@ from typing import Any
 
 import sympy as sp
 
+from symmech.algebra import budget as limits
+
 __all__ = ["DegreeBound", "Unsupported", "Verdict", "identically_zero"]
 
 #: |S| >= D * SAFETY: the probability of a wrong "identically zero" is below 1/SAFETY.
@@ -114,6 +116,8 @@ def _linear_angles(arg: sp.Expr) -> list[tuple[sp.Expr, int]] | None:
     """``arg = sum k_i u_i`` with integer k_i and atoms u_i (symbols, function
     applications), or None."""
     terms = []
+    if limits.expanded_terms(arg, limits.EXPAND_TERMS + 1)[0] > limits.EXPAND_TERMS:
+        return None
     for term in sp.Add.make_args(sp.expand(arg)):
         coeff, rest = term.as_coeff_Mul()
         if not coeff.is_Integer or rest.is_number:

@@ -74,10 +74,9 @@ def tidy(expr: sp.Expr, level: Level = "light") -> sp.Expr:
         return expr
     if not _small(expr, limits.LIGHT_SIMPLIFY_OPS):
         return expr
-    ops = sp.count_ops(expr)
-    if level == "full" and ops <= limits.FULL_SIMPLIFY_OPS:
+    if level == "full" and limits.affordable(expr, limits.FULL_SIMPLIFY_OPS):
         return sp.simplify(expr)
-    if ops <= limits.LIGHT_SIMPLIFY_OPS:
+    if limits.affordable(expr, limits.LIGHT_SIMPLIFY_OPS):
         if _is_rational_function(expr):
             return sp.factor_terms(sp.cancel(expr))
         return sp.factor_terms(expr)
@@ -106,7 +105,7 @@ def normal_form(expr: sp.Expr, max_ops: int | None = None) -> sp.Expr:
     max_ops = limits.LIGHT_SIMPLIFY_OPS if max_ops is None else max_ops
     if expr.is_number or expr.is_Symbol or not _small(expr, max_ops):
         return expr
-    if sp.count_ops(expr) > max_ops:
+    if not limits.affordable(expr, max_ops):
         return expr
     field = RationalField([expr])
     if not field.exact:
@@ -122,9 +121,9 @@ def polish(expr: sp.Expr, level: Level) -> sp.Expr:
         return expr
     if not _small(expr, limits.FULL_SIMPLIFY_OPS):
         return expr
-    ops = sp.count_ops(expr)
-    if ops > limits.FULL_SIMPLIFY_OPS:
+    if not limits.affordable(expr, limits.FULL_SIMPLIFY_OPS):
         return expr
+    ops = sp.count_ops(expr)
     simpler = sp.simplify(expr)
     return simpler if sp.count_ops(simpler) <= ops else expr
 

@@ -140,7 +140,7 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     if expr.is_number or expr.is_Symbol:
         return sp.nsimplify(expr) if isinstance(expr, sp.Float) else expr
     limits.checkpoint()
-    if sp.count_ops(expr) > limits.STABLE_OPS:
+    if not limits.affordable(expr, limits.STABLE_OPS):
         return expr
     st = frozenset(state)
     if _already_stable(expr, st) or limits.expanded_terms(expr)[0] > limits.STABLE_TERMS:

@@ -59,6 +59,10 @@ def _bench(args: argparse.Namespace, say: Callable) -> int:
     if any(len(r) != 2 for r in routes):
         raise SymmechError(f"--routes: expected backend:method pairs, got {args.routes!r}")
     tolerances = numbers(args.tolerances, "--tolerances")
+    if args.repeats < 1:
+        raise SymmechError(f"--repeats: expected a number >= 1, got {args.repeats}")
+    if args.plot:
+        wp.check_plot_path(args.plot)
     say(f"reference for {case.scene_name}")
     ref, table = wp.rows(
         case,

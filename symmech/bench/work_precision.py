@@ -16,6 +16,7 @@ draws error against run time on log-log axes (matplotlib, the ``plot`` extra).
 from __future__ import annotations
 
 import math
+import os
 import statistics
 import time
 from collections.abc import Sequence
@@ -27,6 +28,7 @@ import numpy as np
 import symmech.simulate as simulate_pkg
 from symmech.bench.baseline import baseline_run, prepare
 from symmech.bench.cases import Case, bouncing_ball_state, bouncing_ball_times
+from symmech.errors import SymmechError
 from symmech.simulate.reference import as_float, reference_run
 
 __all__ = ["Reference", "Row", "format_table", "measure", "plot", "reference", "rows"]
@@ -248,3 +250,20 @@ def plot(case: Case, table: Sequence[Row], path: str) -> None:
         ax.legend()
     # through the one writer of output files: a link at ``path`` is replaced, not followed
     save_figure(fig, path)
+
+
+def check_plot_path(path: str) -> None:
+    """Refuse, before anything runs, a plot path the figure writer cannot write: an image
+    format other than :data:`symmech.simulate.plotting.IMAGE_FORMATS` (a raw ValueError
+    after the whole benchmark, exit 3, before), or a folder that does not exist."""
+    from symmech.simulate.plotting import IMAGE_FORMATS
+
+    suffix = os.path.splitext(str(path))[1].lower() or ".png"
+    if suffix not in IMAGE_FORMATS:
+        raise SymmechError(
+            f"--plot {path!r}: no {suffix!r} images; name a file ending in one of"
+            f" {', '.join(IMAGE_FORMATS)}"
+        )
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise SymmechError(f"--plot {path!r}: the folder {folder!r} does not exist")

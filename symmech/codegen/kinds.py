@@ -448,7 +448,12 @@ def forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[str
                     idx += [index[base]] * int(power)
                 elif factor.free_symbols & index.keys():
                     plain = False
-            if not plain and not expanded and sp.count_ops(term) <= limits.NOTE_EXPAND_OPS:
+            if (
+                not plain
+                and not expanded
+                and limits.expanded_terms(term, limits.NOTE_EXPAND_TERMS + 1)[0]
+                <= limits.NOTE_EXPAND_TERMS
+            ):
                 monomials(k, sp.expand(term), True)
             elif not plain:
                 # too large to expand for a note: count every pair of its velocities as

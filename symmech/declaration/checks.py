@@ -432,10 +432,7 @@ def _check_everywhere(
         verdict = Verdict("undecided", f"the search failed ({type(exc).__name__})")
     if verdict.status == "refuted":
         where = _at(verdict.point, G).replace(" at the sampled point", " at the point")
-        problems.add(
-            f"{label}: not positive definite{where} ({verdict.detail}), a point found by"
-            " searching from the sampled points"
-        )
+        problems.add(f"{label}: not positive definite{where} ({verdict.detail}), {verdict.found}")
     elif verdict.status == "undecided":
         warnings.warn(
             f"{label}: positive definiteness is undecided: {verdict.detail}; symmech"

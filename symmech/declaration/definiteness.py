@@ -13,18 +13,29 @@ each sampled point, over every value of the coordinates:
    * the kinetic energy: ``T`` a sum of nonnegative terms (``m/2 (x_dot + l cos q
      q_dot)**2 + ...``, :func:`~symmech.algebra.numeric.proven_sign` with the
      velocities real) makes g positive semidefinite at every q;
+   * the kinetic energy with the parameters at their sampled values: a sum of squares with
+     positive weights (``m1/2 (x_dot + l cos q q_dot)**2`` with m1 unsigned but 0.4 at
+     the sample) proves g positive semidefinite for those values;
    * interval arithmetic (:mod:`mpmath.iv`, outward rounding) over the whole range of
      each coordinate (from its assumptions; ``sin`` and ``cos`` in [-1, 1], even powers
      nonnegative): for a diagonal metric each diagonal entry has a lower bound >= 0; for
      n <= 3 the leading principal minors ``D_1, ..., D_{n-1}`` have lower bounds > 0 and
-     ``det g`` >= 0 (Sylvester's criterion, with the limit case det g = 0); for any n, the
+     ``det g`` >= 0 (Sylvester's criterion, with the limit case det g = 0), each minor
+     bounded as formed and, when that proves nothing, linearised (products of sin and
+     cos written as sums of sin and cos of combined angles, so that ``cos q1 cos q2 +
+     sin q1 sin q2`` is one term ``cos(q1 - q2)`` and the bound keeps its correlation:
+     the 2-link pendulum on a cart imported from sympy.physics.mechanics); for any n, the
      pivots of an LDL^T factorisation in interval arithmetic have lower bounds > 0 (the
      last >= 0);
    * exact real roots (:func:`sympy.real_roots`) of a diagonal entry or leading minor that
      is a polynomial in one coordinate: it is nonnegative iff it is between and beyond its
      roots;
 
-2. **refuted**: a point where g is indefinite, found by the exact roots above or by a
+2. **refuted**: a point where g is indefinite, found first by the exact real roots of a
+   diagonal entry or leading minor in one coordinate (a polynomial's, above, or those
+   ``sympy.solveset`` gives of any other, within the budgets
+   :data:`symmech.algebra.budget.ROOTS_OPS` and ``ROOTS_SECONDS``: ``1 - exp(x - 1000)``
+   has the root x = 1000, far beyond any sample, and is negative past it), then by a
    compass search from each sampled point, minimising a diagonal entry or the smallest
    eigenvalue of g scaled to unit diagonal (``D^-1/2 g D^-1/2``, free of units); the
    point is confirmed by :func:`~symmech.algebra.numeric.classify_symmetric` at a
@@ -41,9 +52,10 @@ evaluated per metric.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -52,6 +64,7 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech.algebra import budget as limits
 from symmech.algebra.numeric import (
     EvaluationError,
     classify_symmetric,
@@ -84,11 +97,13 @@ _INF = mpmath.inf
 @dataclass(frozen=True)
 class Verdict:
     """``status``: "proven", "refuted" or "undecided"; ``detail``: how (for messages);
-    ``point``: the sampled point with the coordinates where g is indefinite (refuted)."""
+    ``point``: the sampled point with the coordinates where g is indefinite (refuted);
+    ``found``: how that point was found (for messages)."""
 
     status: Literal["proven", "refuted", "undecided"]
     detail: str
     point: Mapping = field(default_factory=dict)
+    found: str = "a point found by searching from the sampled points"
 
 
 # -- interval arithmetic -------------------------------------------------------------------
@@ -240,6 +255,74 @@ def _exact_sign(entry: sp.Expr, coordinate: sp.Symbol) -> tuple[str, sp.Rational
     return "nonneg", None
 
 
+def _one_generator(entry: sp.Expr, coordinate: sp.Symbol) -> bool:
+    """Whether ``entry`` is a polynomial in a single function of ``coordinate``
+    (``exp(x - 1000)``, ``cosh(x/1000)``, ``sin(x)``, ``sqrt(x**2 + 1)``): what solveset
+    inverts directly.  Several (``sin(x)``, ``cos(2 x)``, ``x exp(x)``) can cost it
+    minutes, in a loop no deadline reaches (its own time limit is a signal, main thread
+    only), so they are left to the search."""
+    try:
+        gens = sp.Poly(entry).gens
+    except (sp.PolynomialError, sp.GeneratorsNeeded):
+        return False
+    return len([g for g in gens if g.has(coordinate)]) == 1
+
+
+def _solved_roots(entry: sp.Expr, coordinate: sp.Symbol) -> list[sp.Expr] | None:
+    """The real roots of ``entry`` (a function of one real coordinate, not a polynomial)
+    that ``sympy.solveset`` finds exactly, sorted; a periodic family contributes its
+    members for n = -1, 0, 1.  None when it finds none it can list, or over the budgets
+    ROOTS_OPS / ROOTS_SECONDS of :mod:`symmech.algebra.budget`."""
+    if sp.count_ops(entry) > limits.ROOTS_OPS or not _one_generator(entry, coordinate):
+        return None
+    try:
+        with limits.time_limit(
+            "exact roots of a metric entry", limits.ROOTS_SECONDS, "ROOTS_SECONDS"
+        ):
+            found = sp.solveset(entry, coordinate, sp.S.Reals)
+    except limits.BudgetExceeded as exc:
+        if exc.budget != "ROOTS_SECONDS":
+            raise  # the deadline of a stage around this one
+        return None
+    except (NotImplementedError, ValueError, TypeError, RecursionError):
+        return None
+    parts = found.args if isinstance(found, sp.Union) else (found,)
+    roots: list[sp.Expr] = []
+    for part in parts:
+        if isinstance(part, sp.FiniteSet):
+            roots.extend(part.args)
+        elif isinstance(part, sp.ImageSet) and part.base_sets == (sp.S.Integers,):
+            roots.extend(part.lamda(k) for k in (-1, 0, 1))
+        elif part is not sp.S.EmptySet:
+            return None  # a ConditionSet, an interval: nothing to list
+    if not roots or not all(r.is_number and r.is_real for r in roots):
+        return None
+    return sorted(set(roots), key=lambda r: sp.N(r, 30))
+
+
+def _negative_past_roots(
+    entry: sp.Expr, coordinate: sp.Symbol
+) -> tuple[sp.Rational, list[sp.Expr]] | None:
+    """``(t, roots)``: a point t where ``entry`` (one real coordinate, not a polynomial)
+    is negative, between or beyond the exact real roots listed by :func:`_solved_roots`;
+    None when none is found."""
+    roots = _solved_roots(entry, coordinate)
+    if roots is None:
+        return None
+    values = [sp.Rational(str(sp.N(r, 30))) for r in roots]
+    lo = 0 if coordinate.is_nonnegative else -math.inf
+    tests = [values[0] - 1, *((a + b) / 2 for a, b in itertools.pairwise(values)), values[-1] + 1]
+    for t in tests:
+        # the shortest decimal where it is negative: an integer, then 3, 6, 12 places
+        for short in [sp.Rational(round(t * 10**d), 10**d) for d in (0, 3, 6, 12)] + [t]:
+            if short < lo:
+                continue
+            value = sp.N(entry.xreplace({coordinate: short}), 30)
+            if value.is_real and value.is_negative:
+                return short, roots
+    return None
+
+
 # -- search ----------------------------------------------------------------------------------
 
 
@@ -348,6 +431,18 @@ def definiteness(
     module docstring).  ``G`` must already have passed the sampled check."""
     if kinetic_energy is not None and proven_sign(kinetic_energy) in ("pos", "nonneg"):
         return Verdict("proven", "the kinetic energy is a sum of nonnegative terms")
+    if (
+        kinetic_energy is not None
+        and points
+        and all(
+            proven_sign(_at_parameters(kinetic_energy, sample, coordinates)) in ("pos", "nonneg")
+            for sample in points
+        )
+    ):
+        return Verdict(
+            "proven",
+            "the kinetic energy is a sum of nonnegative terms at the sampled parameter values",
+        )
     n = G.rows
     free = free_symbols_of(G)
     q = [c for c in coordinates if c in free]
@@ -403,6 +498,17 @@ def _diagonal(
                 except EvaluationError:  # another entry undefined there: the entry says it
                     return Verdict("refuted", f"diagonal entry [{i},{i}] < 0", point)
                 return Verdict("refuted", classify_symmetric(A)[1], point)
+            past = _negative_past_roots(at_sample, own[0])
+            if past is not None:
+                return _refuted_past_roots(
+                    G, f"diagonal entry [{i},{i}] = {_short(e)}", own[0], past, sample
+                )
+        elif len(own) > 1 and not (at_sample.free_symbols - set(own)):
+            for c, part in _slices(at_sample, own, sample):
+                past = _past(part, c)
+                if past is not None:
+                    what = f"diagonal entry [{i},{i}] = {_short(e)}"
+                    return _refuted_past_roots(G, what, c, past, sample)
         mine = [c for c in q if c in e.free_symbols]
         value, where = _compass(_entry(e), _float_point(sample), mine, budget)
         if value < 0:
@@ -431,6 +537,16 @@ def _full(
         for k, m in enumerate(minors)
     ):
         return None
+    for k, minor in enumerate(minors):
+        at_sample = minor.xreplace(dict(fixed))
+        own = [c for c in q if c in at_sample.free_symbols]
+        if not own or at_sample.free_symbols - set(own):
+            continue
+        for c, part in _slices(at_sample, own, sample):
+            past = _past(part, c)
+            if past is not None:
+                label = f"the leading minor D_{k + 1} = {_short(minor)}"
+                return _refuted_past_roots(G, label, c, past, sample)
     value, where = _compass(_scaled_min_eigenvalue(G), _float_point(sample), q, budget)
     if value < 0:
         confirmed = _confirm(G, where, sample, q)
@@ -443,6 +559,52 @@ def _full(
         " is indefinite"
     )
     return None
+
+
+def _slices(
+    e: sp.Expr, own: Sequence[sp.Symbol], sample: Mapping
+) -> Iterator[tuple[sp.Symbol, sp.Expr]]:
+    """``e`` as a function of each of its coordinates ``own`` in turn, the others at their
+    sampled values (a line through the sample along that coordinate)."""
+    for c in own:
+        others = {d: sp.Rational(sample[d]) for d in own if d != c and d in sample}
+        if len(others) == len(own) - 1:
+            yield c, e.xreplace(others)
+
+
+def _past(part: sp.Expr, c: sp.Symbol) -> tuple[sp.Rational, list[sp.Expr]] | None:
+    """A point where ``part`` (a function of the coordinate c alone) is negative, from
+    its exact real roots (a polynomial's, or those solveset finds), with the roots; None
+    when none is found."""
+    exact = _exact_sign(part, c)
+    if exact is None:
+        return _negative_past_roots(part, c)
+    return (exact[1], []) if exact[0] == "negative" else None
+
+
+def _refuted_past_roots(
+    G: sp.MatrixBase,
+    what: str,
+    coordinate: sp.Symbol,
+    past: tuple[sp.Rational, list[sp.Expr]],
+    sample: Mapping,
+) -> Verdict:
+    """The refutation at the point past the exact roots of ``what`` (an entry or a
+    leading minor negative there: g is not positive semidefinite)."""
+    t, roots = past
+    point = {**sample, coordinate: t}
+    said = ", ".join(f"{coordinate} = {_short(r)}" for r in roots)
+    detail = f"{what} < 0 there"
+    if roots:
+        plural = "s" if len(roots) > 1 else ""
+        detail = f"{what} has the exact real root{plural} {said} and is < 0 past it"
+    try:
+        A, _ = real_values(G, point)
+        detail = f"{classify_symmetric(A)[1]}: {detail}"
+    except EvaluationError:  # another entry undefined there: the entry or minor says it
+        pass
+    found = "a point found from the exact real roots" if roots else "a point found exactly"
+    return Verdict("refuted", detail, point, found)
 
 
 def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
@@ -482,10 +644,41 @@ def _interval_cholesky(G: sp.MatrixBase, fixed: Mapping) -> bool:
         return False
 
 
+def _at_parameters(T: sp.Expr, sample: Mapping, coordinates: Sequence[sp.Symbol]) -> sp.Expr:
+    """``T`` with every sampled value that is not a coordinate's put in (the parameters):
+    its weights become numbers whose sign :func:`proven_sign` reads."""
+    values = {k: v for k, v in sample.items() if k not in set(coordinates)}
+    try:
+        return T.xreplace(
+            {k: sp.Rational(v) if not isinstance(v, sp.Basic) else v for k, v in values.items()}
+        )
+    except (TypeError, ValueError):
+        return T
+
+
+@functools.lru_cache(maxsize=64)
+def _linearised(minor: sp.Expr) -> sp.Expr | None:
+    """``minor`` with products of sin and cos written as sums of sin and cos of combined
+    angles (``sympy.simplify.fu.TR8``, then expanded), or None (no sin or cos, or over
+    the budget LINEARIZE_OPS)."""
+    if not minor.has(sp.sin, sp.cos) or not limits.affordable(minor, limits.LINEARIZE_OPS):
+        return None
+    from sympy.simplify.fu import TR8
+
+    try:
+        return sp.expand(TR8(sp.expand(minor)))
+    except (TypeError, ValueError, RecursionError):  # pragma: no cover - no verdict
+        return None
+
+
 def _minor_sign(minor: sp.Expr, fixed: Mapping, q: Sequence[sp.Symbol]) -> str | None:
-    """ "pos" or "nonneg" when proven over the coordinates (interval bound, or the exact
-    roots of a polynomial in one coordinate), for the parameters at ``fixed``."""
+    """ "pos" or "nonneg" when proven over the coordinates (interval bound, of the minor
+    or of its linearised form, or the exact roots of a polynomial in one coordinate), for
+    the parameters at ``fixed``."""
     bound = lower_bound(minor, fixed)
+    if bound is None or bound < 0:
+        linear = _linearised(minor)
+        bound = lower_bound(linear, fixed) if linear is not None else None
     if bound is not None and bound >= 0:
         return "pos" if bound > 0 else "nonneg"
     at_sample = minor.xreplace(dict(fixed))

@@ -211,7 +211,7 @@ class MpGait(GaitFunctions):
     def _lambdify(self, key: tuple[str, Any], scene: Scene, build: Callable[[], Any]):
         fn = self._fns.get(key)
         if fn is None:
-            expr = sp.sympify(build())
+            expr = sp.sympify(build(), strict=True)
             by_name = {s: self._exact[p] for p in self._exact for s in expr.free_symbols
                        if getattr(s, "name", None) == p.name}  # fmt: skip
             expr = expr.xreplace(by_name)

@@ -200,7 +200,7 @@ def pinned_scene(
     sub = dict(zip(Q, E, strict=True))
     G = sp.Matrix(impact_scene.mass_matrix()).xreplace(sub)
     g = (J.T * G * J).applyfunc(lambda e: sp.trigsimp(sp.expand(e)))
-    V = sp.trigsimp(sp.sympify(impact_scene.potential).xreplace(sub))
+    V = sp.trigsimp(sp.sympify(impact_scene.potential, strict=True).xreplace(sub))
     F = sp.Matrix(impact_scene.forces)
     forces = None
     if any(e != 0 for e in F):

@@ -25,6 +25,7 @@ from typing import Any, TypeAlias
 
 import sympy as sp
 
+from symmech.algebra import budget as limits
 from symmech.algebra.field import common_domain
 from symmech.algebra.simplification import Level, check_level, normal_form, polish
 from symmech.errors import SceneError
@@ -222,6 +223,8 @@ def _tidy_entry(e: sp.Expr, level: Level) -> sp.Expr:
     (:func:`~symmech.algebra.simplification.normal_form`, bounded in size), then
     :func:`~symmech.algebra.simplification.polish` at ``"full"``."""
     if level == "none":
+        return e
+    if not limits.affordable(e, limits.ZERO_EXACT_OPS):
         return e
     e = sp.expand(e)
     if e.is_polynomial():

@@ -123,6 +123,7 @@ def _fraction(
     and denominator are first put in the Pythagorean normal form (``reduce``:
     ``sin^2 -> 1 - cos^2``) when that makes them shorter: so ``cos^2 / (sin^2 +
     cos^2)`` becomes ``cos^2``, while ``I a^2 cos^2 + I b^2 sin^2`` keeps its shorter form."""
+    limits.checkpoint()  # one gcd per entry: the deadline holds between them
     if not num:
         return field.zero
     rn, rd = reduce(num), reduce(den)

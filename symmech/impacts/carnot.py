@@ -403,5 +403,5 @@ def _symbolic(s: _Setup) -> Formed:
     return (
         (lhs - rhs).expr(v, simplify=True),
         {name: q.expr(v) for name, q in terms.items()},
-        sp.ImmutableMatrix(x.to_sympy(v).applyfunc(sp.expand)),
+        sp.ImmutableMatrix(x.to_sympy(v).applyfunc(limits.expand_affordable)),
     )

@@ -138,7 +138,7 @@ def check_regular(
     v = sp.Matrix(velocities)
 
     def form(row: sp.MatrixBase) -> str:
-        return _short(sp.expand((sp.Matrix(row) * v)[0, 0]))
+        return _short(limits.expand_affordable((sp.Matrix(row) * v)[0, 0]))
 
     perm = [form(mu[a, :]) for a in range(mu.rows)]
     if is_zero(C[0, 0], points) is True:
@@ -244,7 +244,7 @@ def _factors(expr: sp.Expr) -> list[sp.Expr]:
     """The non-constant irreducible factors of the numerator of ``expr`` (the numerator
     itself, with its numeric content removed, when it is too large to factor)."""
     expr = sp.sympify(expr, strict=True)
-    if sp.count_ops(expr) > FACTOR_MAX_OPS:
+    if not limits.affordable(expr, FACTOR_MAX_OPS):
         num = sp.fraction(sp.together(expr))[0]
         return [sp.factor_terms(num).as_coeff_Mul()[1]] if num.free_symbols else []
     expr = sp.cancel(sp.together(expr))
@@ -260,7 +260,12 @@ def _divides(f: sp.Expr, e: sp.Expr) -> bool:
     """True if the polynomial f divides the numerator of e (exact polynomial division over
     the generators of both; False when either is not a polynomial or too large)."""
     if sp.count_ops(f) > FACTOR_MAX_OPS or sp.count_ops(e) > FACTOR_MAX_OPS:
-        return sp.expand(f - e) == 0
+        return f == e or (
+            limits.expanded_terms(f - e, limits.EXPAND_TERMS + 1)[0] <= limits.EXPAND_TERMS
+            and sp.expand(f - e) == 0
+        )
+    if not (limits.affordable(f, FACTOR_MAX_OPS) and limits.affordable(e, FACTOR_MAX_OPS)):
+        return f == e
     num = sp.fraction(sp.together(e))[0]
     try:
         pf, pe = sp.parallel_poly_from_expr([f, num])[0]
@@ -276,7 +281,7 @@ def pythagorean(f: sp.Expr) -> sp.Expr:
     ``cos(u)`` occur (the remainder modulo ``sin(u)^2 + cos(u)^2 - 1``, degree <= 1 in
     each such sin(u)); f itself when it is not small or not polynomial in them."""
     f = sp.sympify(f, strict=True)
-    if sp.count_ops(f) > FACTOR_MAX_OPS:
+    if not limits.affordable(f, FACTOR_MAX_OPS):
         return f
     sines = {e.args[0]: e for e in f.atoms(sp.sin)}
     for cos in f.atoms(sp.cos):
@@ -320,6 +325,8 @@ def no_real_zeros(f: sp.Expr) -> bool:
         return False
     if not f.free_symbols or f.is_nonzero:
         return True
+    if limits.expanded_terms(f, limits.EXPAND_TERMS + 1)[0] > limits.EXPAND_TERMS:
+        return False  # no verdict: the factor is kept
     if _positive_on_the_circle(f):
         return True
     try:
@@ -364,7 +371,7 @@ def singular_set(
             return
         if sp.count_ops(reduced) < sp.count_ops(f):
             f = reduced
-        if sp.count_ops(f) <= FACTOR_MAX_OPS:
+        if limits.affordable(f, FACTOR_MAX_OPS):
             f = sp.factor(f)
         if any(_divides(f, s) or _divides(s, f) for s in seen):
             return
@@ -376,7 +383,7 @@ def singular_set(
         for f in _factors(expr):
             add(f, description)
     for expr in closed_form:
-        if expr.is_number or sp.count_ops(expr) > FACTOR_MAX_OPS:  # numbers: no denominator
+        if expr.is_number or not limits.affordable(expr, FACTOR_MAX_OPS):  # numbers: none
             continue
         den = sp.fraction(sp.cancel(sp.together(expr)))[1]
         for f in _factors(den):

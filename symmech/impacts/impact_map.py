@@ -477,7 +477,7 @@ def derive_impact_map(
     state = (*q, TIME)
 
     def finish(e: sp.Expr) -> sp.Expr:
-        if simplify == "full" and sp.count_ops(e) <= limits.IMPACT_FULL_OPS:
+        if simplify == "full" and limits.affordable(e, limits.IMPACT_FULL_OPS):
             e = sp.simplify(e)
         return stable_coefficient(e, state)
 

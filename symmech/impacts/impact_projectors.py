@@ -37,6 +37,7 @@ import sympy as sp
 from sympy.matrices.utilities import dotprodsimp
 from sympy.polys.matrices import DomainMatrix
 
+from symmech.algebra.block_structure import diagonal_blocks
 from symmech.algebra.field import common_domain
 from symmech.algebra.simplification import Level, tidy, tidy_matrix
 from symmech.constraints.projectors import projectors as permanent_projectors
@@ -147,6 +148,9 @@ def impact_projectors(
     mu = sp.Matrix(mu) if mu.rows else sp.zeros(0, n)
     dpsi = sp.Matrix(dpsi)
     nu = sp.Matrix(nu) if nu.rows else sp.zeros(0, n)
+    touched = _touched(g, mu, dpsi.col_join(nu))
+    if len(touched) < n:
+        return _restricted(g, mu, dpsi, nu, level, check, permanent, several, touched)
     P, Q = (sp.Matrix(M) for M in (permanent or permanent_projectors(g, mu, level)))
     if level != "none":
         field = common_domain([g, mu, dpsi, nu])
@@ -186,6 +190,103 @@ def impact_projectors(
             ),
         }
     return _pack(g, mu, dpsi, nu, P, Q, Y, PY, C, K, beta, QQ, PP, T, Qt, Pt, N, **extras)
+
+
+def _touched(g: sp.Matrix, mu: sp.Matrix, A: sp.Matrix) -> list[int]:
+    """The velocities the impact can change: the union of the diagonal blocks of ``g``
+    (joined by the rows of ``mu`` that link them) that meet a row of ``A`` (sorted)."""
+    n = g.rows
+    links = [[j for j in range(n) if mu[a, j] != 0] for a in range(mu.rows)]
+    joined: dict[int, set[int]] = {}
+    for row in links:
+        for i in row:
+            joined.setdefault(i, set()).update(row)
+    blocks = diagonal_blocks(n, lambda i, j: g[i, j] != 0 or (i in joined and j in joined[i]))
+    hit = {j for a in range(A.rows) for j in range(n) if A[a, j] != 0}
+    return sorted(i for block in blocks if hit.intersection(block) for i in block)
+
+
+def _restricted(
+    g: sp.Matrix,
+    mu: sp.Matrix,
+    dpsi: sp.Matrix,
+    nu: sp.Matrix,
+    level: Level,
+    check: Callable[[sp.Matrix, sp.Matrix], None] | None,
+    permanent: tuple[sp.MatrixBase, sp.MatrixBase] | None,
+    several: bool,
+    S: list[int],
+) -> ImpactProjectors:
+    """The objects built on the touched velocities ``S`` only (:func:`_touched`), then put
+    back in n dimensions.  With the velocities ordered (S, R), g, P and Q are block
+    diagonal and every row of A vanishes on R, so ``Y = g^-1 A^T``, ``P Y``, ``N`` and
+    the rows of ``beta = (P Y)^T g`` vanish on R: QQ, T~, Q~ are zero outside the S x S
+    block, PP and P~ are the identity on R, and C, K are those of the S block.  Exact
+    (no step depends on R), and an impact on one coordinate of a 200-coordinate
+    diagonal scene is a 1 x 1 problem instead of a dense 201 x 201 adjugate."""
+    n = g.rows
+    rows = [a for a in range(mu.rows) if any(mu[a, j] != 0 for j in S)]
+    sub_permanent = None
+    if permanent is not None:
+        sub_permanent = tuple(sp.Matrix(M).extract(S, S) for M in permanent)
+    part = impact_projectors(
+        g.extract(S, S),
+        mu.extract(rows, S) if rows else sp.zeros(0, len(S)),
+        dpsi.extract(list(range(dpsi.rows)), S),
+        nu.extract(list(range(nu.rows)), S) if nu.rows else sp.zeros(0, len(S)),
+        level,
+        check,
+        sub_permanent,
+        several,
+    )
+    P, Q = (sp.Matrix(M) for M in (permanent or permanent_projectors(g, mu, level)))
+
+    def rows_of(M: sp.MatrixBase) -> sp.Matrix:  # S rows -> n rows, zero on R
+        out = sp.zeros(n, M.cols)
+        for r, i in enumerate(S):
+            out[i, :] = M[r, :]
+        return out
+
+    def cols_of(M: sp.MatrixBase) -> sp.Matrix:  # S columns -> n columns, zero on R
+        return rows_of(sp.Matrix(M).T).T
+
+    def square(M: sp.MatrixBase, identity: bool = False) -> sp.Matrix:
+        out = sp.eye(n) if identity else sp.zeros(n, n)
+        for r, i in enumerate(S):
+            for c, j in enumerate(S):
+                out[i, j] = M[r, c]
+        return out
+
+    extras = {}
+    if several:
+        assert part.PYK is not None and part.Kbeta is not None
+        extras = {
+            "PYK": rows_of(part.PYK),
+            "Kbeta": cols_of(part.Kbeta),
+            "T_walls": tuple(square(T) for T in part.T_walls),
+            "Kbeta_walls": tuple(cols_of(M) for M in part.Kbeta_walls),
+        }
+    return _pack(
+        g,
+        mu,
+        dpsi,
+        nu,
+        P,
+        Q,
+        rows_of(part.Y),
+        rows_of(part.PY),
+        part.C,
+        part.K,
+        cols_of(part.beta),
+        square(part.QQ),
+        square(part.PP, identity=True),
+        square(part.T),
+        square(part.Qt),
+        square(part.Pt, identity=True),
+        rows_of(part.N),
+        denominators=part.denominators,
+        **extras,
+    )
 
 
 def _pack(

@@ -537,7 +537,7 @@ def _closed_form(
         return out
 
     def finish(e: sp.Expr) -> sp.Expr:
-        if simplify == "full" and sp.count_ops(e) <= limits.IMPACT_FULL_OPS:
+        if simplify == "full" and limits.affordable(e, limits.IMPACT_FULL_OPS):
             e = sp.simplify(e)
         return e
 

@@ -156,15 +156,58 @@ def _from_lagrangian(model: Model) -> tuple[sp.Matrix, sp.Expr]:
 
     L = sp.expand(model.lagrangian)
     qd = model.basis
+    _refuse_non_quadratic(L, qd)
     M = sp.hessian(L, qd).applyfunc(sp.expand)
     L0 = L.xreplace({d: 0 for d in qd})
-    linear = sp.expand(L - L0 - (sp.Matrix(qd).T * M * sp.Matrix(qd))[0] / 2)
-    if linear != 0:
-        raise SceneError(
-            f"from_mechanics: the Lagrangian has terms linear in the velocities ({linear});"
-            " symmech takes L = T - V with T quadratic"
-        )
     return M.applyfunc(normal_form), -L0
+
+
+def _velocity_degree(term: sp.Expr, qd: set) -> int | None:
+    """The degree of one term of an expanded Lagrangian in the velocities ``qd``; None
+    when the term is not a monomial in them (a velocity inside a function or a root)."""
+    degree = 0
+    for factor in sp.Mul.make_args(term):
+        base, power = factor.as_base_exp()
+        if base in qd:
+            if not (power.is_Integer and power > 0):
+                return None
+            degree += int(power)
+        elif factor.has(*qd):
+            return None
+    return degree
+
+
+def _refuse_non_quadratic(L: sp.Expr, qd: Sequence[sp.Expr]) -> None:
+    """Refuse an expanded Lagrangian that is not ``T - V`` with T a quadratic form in the
+    velocities, naming the terms of the wrong degree (read term by term: the Hessian of a
+    quartic L depends on the velocities, and ``L - L0 - v^T M v / 2`` then mixes its
+    terms)."""
+    wrong: dict[str, list[sp.Expr]] = {}
+    velocities = set(qd)
+    for term in sp.Add.make_args(L):
+        degree = _velocity_degree(term, velocities)
+        if degree in (0, 2):
+            continue
+        if degree == 1:
+            kind = "linear in the velocities (gyroscopic or a moving frame)"
+        elif degree is None:
+            kind = "not polynomial in the velocities"
+        else:
+            kind = f"of degree {degree} in the velocities"
+        wrong.setdefault(kind, []).append(term)
+    if wrong:
+        said = "; ".join(
+            f"terms {kind} ({_short(sp.Add(*terms))})" for kind, terms in wrong.items()
+        )
+        raise SceneError(
+            f"from_mechanics: the Lagrangian has {said}; symmech takes L = T - V with T a"
+            " quadratic form in the velocities"
+        )
+
+
+def _short(e: sp.Expr, limit: int = 120) -> str:
+    text = str(e)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _origin(point: Any, frame: Any) -> Any:
@@ -206,7 +249,15 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
             w = _partials(where.ang_vel_in(model.frame), model, f"torque on {where}")
             F = [a + _dot(vector, b) for a, b in zip(F, w, strict=True)]
             continue
-        vel = _partials(where.vel(model.frame), model, f"force at {where}")
+        try:
+            velocity = where.vel(model.frame)
+        except ValueError:  # sympy: "Velocity of point Q has not been defined in ..."
+            raise SceneError(
+                f"from_mechanics: the load on point {where}: its velocity in the frame"
+                f" {model.frame} is not defined (give it with {where}.set_vel or"
+                " v2pt_theory before building the model)"
+            ) from None
+        vel = _partials(velocity, model, f"force at {where}")
         Fr = [_dot(vector, b) for b in vel]
         if _constant_in(vector, model.frame):
             origin = model.origin if model.origin is not None else _origin(where, model.frame)
@@ -400,11 +451,38 @@ def _regular_metric(M: sp.Matrix, rows: list[list[sp.Expr]], model: Model) -> sp
     kernel = Vt[sing <= sing[0] * 1e-9] if sing[0] > 0 else Vt
     involved = [w for k, w in enumerate(model.basis) if np.abs(kernel[:, k]).max() > 1e-8]
     where = " on the constraints' kernel" if rows else ""
+    if model.lagrangian is not None:
+        raise SceneError(_singular_lagrangian(model, involved, where))
     raise SceneError(
         f"from_mechanics: the kinetic metric of the model's bodies is singular{where}: no"
         f" body's kinetic energy fixes the velocities {involved} (sympy issue 24887: three"
         " speeds for a particle's orientation); symmech needs a positive definite metric"
         " (give those motions inertia, or leave out the speeds they do not need)"
+    )
+
+
+def _singular_lagrangian(model: Model, involved: list, where: str) -> str:
+    """Why the Hessian of a Lagrangian in the velocities is singular, for the refusal."""
+    L = sp.sympify(model.lagrangian, strict=True)
+    missing = [w for w in involved if not L.has(w)]
+    if missing:
+        t = mechanics().dynamicsymbols._t
+        speeds = sorted(
+            {str(d) for d in atoms(L, sp.Function) if d.args == (t,) and d not in model.q},
+        )
+        hint = (
+            f" (it is written in the speeds {speeds}, not in the q_dots: LagrangesMethod"
+            " needs bodies whose velocities are given in the q_dots)"
+            if speeds
+            else ""
+        )
+        return (
+            f"from_mechanics: the Lagrangian does not depend on the velocities {missing}:"
+            f" it has no kinetic energy in them{hint}; symmech needs T positive definite"
+        )
+    return (
+        f"from_mechanics: the kinetic energy of the Lagrangian is singular{where}: it vanishes"
+        f" for a motion of the velocities {involved}; symmech needs T positive definite"
     )
 
 

@@ -87,6 +87,21 @@ class Model:
                 " (for constraint forces) are not supported; build the KanesMethod without"
                 " u_auxiliary (its equations of motion do not depend on them)"
             )
+        if not len(k.u):
+            raise SceneError(
+                "from_mechanics: the KanesMethod has no generalized speeds (u_ind=[]):"
+                " symmech needs one speed per degree of freedom"
+            )
+        if getattr(k, "_qdot_u_map", None) is None:
+            raise SceneError(
+                "from_mechanics: the KanesMethod has no kinematic differential equations"
+                " (kd_eqs=): symmech needs q_dot in terms of the speeds"
+            )
+        if k.bodies is None:
+            raise SceneError(
+                "from_mechanics: the KanesMethod has no bodies: its kanes_equations(bodies,"
+                " loads) were never formed and no bodies= were given; form them first"
+            )
         self.q = list(k.q)
         self.frame = k._inertial
         self.bodies = list(k.bodies or [])

@@ -210,7 +210,13 @@ class ScipyFlow:
             kwargs["jac"] = self.jac
         if self.solver is not None:
             self._collect()
-        self.solver = self.cls(self.f, t, np.array(y, dtype=float), t_bound, **kwargs)
+        # the loops' rule (RKFlow.start): SciPy's first-step heuristic turns an infinite
+        # rhs into a step of nan, which its step loop then shrinks forever
+        y = np.array(y, dtype=float)
+        self.stats.nfev += 1
+        if not np.all(np.isfinite(self.f(t, y))):
+            raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
+        self.solver = self.cls(self.f, t, y, t_bound, **kwargs)
         self.t_bound = t_bound
 
     def _collect(self) -> None:

@@ -84,6 +84,26 @@ def _write_csv(table: Any, path: str) -> None:
     write_atomic(path, produce)
 
 
+def _check_scheduler(address: str) -> None:
+    """Refuse a ``--scheduler`` that is not a Dask address (``tcp://host:port``) before
+    anything runs: Dask's own parser says why (a raw ValueError, exit 3, before)."""
+    try:
+        from distributed.comm.addressing import get_address_host_port
+    except ImportError as exc:
+        raise SymmechError(
+            f"--scheduler needs dask.distributed ({exc}): pip install 'symmech[sweep]'"
+        ) from None
+    try:
+        _, port = get_address_host_port(address)
+        if not 0 < int(port) < 65536:
+            raise ValueError(f"port {port} is not in 1..65535")
+    except (ValueError, TypeError, KeyError) as exc:
+        raise SymmechError(
+            f"--scheduler {address!r}: not the address of a Dask scheduler ({exc});"
+            " expected tcp://host:port"
+        ) from None
+
+
 def run_command(
     args: argparse.Namespace, load: Callable[[str], Any], say: Callable[[str], None]
 ) -> int:
@@ -96,6 +116,8 @@ def run_command(
     kind = Path(out).suffix.lower()
     if kind not in (".csv", ".parquet"):
         raise SymmechError(f"--out {out!r}: expected a .parquet folder or a .csv file")
+    if args.scheduler:
+        _check_scheduler(args.scheduler)
     sf = load(args.scene)
     params = {str(k): float(v) for k, v in sf.defaults.items()}
     params.update(parameter_values(args.param))
@@ -112,7 +134,12 @@ def run_command(
                 f"--scheduler needs dask.distributed ({exc}): pip install 'symmech[sweep]'"
             ) from None
         say(f"connecting to the Dask scheduler at {args.scheduler}")
-        client = Client(args.scheduler)
+        try:
+            client = Client(args.scheduler)
+        except (TypeError, ValueError) as exc:  # e.g. tls:// without a TLS configuration
+            raise SymmechError(
+                f"--scheduler {args.scheduler!r}: cannot connect ({type(exc).__name__}: {exc})"
+            ) from None
     say(f"sweeping {sf.scene.name}: {len(grid)} runs to t = {args.t_end}")
     try:
         table = sweep(

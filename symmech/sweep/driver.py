@@ -295,7 +295,7 @@ def _execute(
     saver = None
     if store is not None:
         saver = Store(store, fingerprint, N, chunk)
-        done = saver.open()
+        done = saver.open(schema)
         chunks = [c for c in chunks if c[0] not in done]
     bar = Progress(sum(hi - lo for _, lo, hi in chunks), progress)
 
