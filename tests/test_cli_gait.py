@@ -66,3 +66,25 @@ def test_gait_reads_a_gait_file(tmp_path: Path):
     assert "-0.1576880663" in proc.stdout  # the hopper's multiplier (test_gait.py's gait)
     (tmp_path / "hopper.gait.toml").write_text("format = 1\nname = 'hopper'\n")
     assert_one_line_error(symmech("gait", "hopper.gait.toml", cwd=tmp_path), "modes")
+
+
+def test_continuation_shows_a_bar_on_a_terminal(tmp_path: Path, monkeypatch, capsys):
+    """On a terminal the continuation counts its parameter values with a tqdm bar on
+    stderr (the wheel's multiplier eta^2 does not depend on the slope)."""
+    import io
+    import sys
+
+    from symmech.cli import main
+
+    class Terminal(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    err = Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    png = tmp_path / "w.png"
+    args = ["gait", "rimless_wheel", "--continue", "gamma=0.08:0.1", "--steps", "3"]
+    assert main([*args, "--plot", str(png)]) == 0
+    assert "continuation in gamma: 100%" in err.getvalue() and "3/3" in err.getvalue()
+    out = capsys.readouterr().out
+    assert out.count("stable, multipliers [+0.680272") == 3

@@ -118,18 +118,44 @@ def run_gait_command(args: argparse.Namespace, progress: Callable[[str], None]) 
     return 0
 
 
+def _bar(total: int, key: str) -> Any:
+    """A tqdm bar of the parameter values done, on stderr when it is a terminal (tqdm is
+    in the ``sweep`` extra; without it, or off a terminal, the progress lines stay)."""
+    import sys
+
+    if not sys.stderr.isatty():
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return None
+    return tqdm(total=total, file=sys.stderr, desc=f"continuation in {key}", unit="gait")
+
+
 def _continue(args, case: GaitCase, gait, params, progress) -> int:
     key, a, b = _range(args.continue_, case)
     n = max(2, int(args.steps))
     values = [a + (b - a) * i / (n - 1) for i in range(n)]
 
     base = CompiledGait(gait, params)
+    bar = _bar(len(values), key)
+
+    started = [0]  # values begun; each begun after the first means one more done
 
     def make(value: float) -> CompiledGait:
-        progress(f"{key} = {value:.6g}")
+        if bar is None:
+            progress(f"{key} = {value:.6g}")
+        elif started[0]:
+            bar.update(1)
+        started[0] += 1
         return base.with_parameters({**params, key: value})
 
-    points = continuation(make, case.section, values, case.guess)
+    try:
+        points = continuation(make, case.section, values, case.guess)
+    finally:
+        if bar is not None:
+            bar.update(bar.total - bar.n)
+            bar.close()
     for p in points:
         if p.point is None:
             print(f"{key} = {p.value:.6g}: no fixed point ({p.failure})")
