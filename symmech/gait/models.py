@@ -112,7 +112,7 @@ def _two_legs(name: str, hip_mass, leg_mass, b, l, g, gamma):
         T, V = T + Ti, V + Vi
     scene = Scene(
         Q,
-        kinetic_energy=sp.expand(T),
+        kinetic_energy=T,
         potential=V,
         walls=[_foot_walls(hip, hip + _leg(t2, l), Q, Qd)],
         name=f"{name}_free",
