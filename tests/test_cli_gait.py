@@ -6,6 +6,8 @@ import math
 import re
 from pathlib import Path
 
+import pytest
+
 from tests.test_cli import assert_one_line_error, symmech
 
 
@@ -88,3 +90,28 @@ def test_continuation_shows_a_bar_on_a_terminal(tmp_path: Path, monkeypatch, cap
     assert "continuation in gamma: 100%" in err.getvalue() and "3/3" in err.getvalue()
     out = capsys.readouterr().out
     assert out.count("stable, multipliers [+0.680272") == 3
+
+
+def test_gait_tables_to_files(tmp_path: Path):
+    """--out writes the routes' table (and the continuation's) as CSV that pandas reads
+    back with the printed figures."""
+    import pandas as pd
+
+    out = tmp_path / "wheel.csv"
+    proc = symmech("gait", "rimless_wheel", "--routes", "c,fd", "--out", str(out), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    table = pd.read_csv(out, index_col=0)
+    eta = (0.09 + math.cos(math.pi / 5)) / 1.09
+    assert list(table.index) == ["c", "fd"]
+    assert abs(table.loc["c", "mult0_re"] - eta**2) <= 1e-13
+    assert table.loc["fd", "error"] > 1e3 * table.loc["c", "error"]
+    cont = tmp_path / "cont.csv"
+    args = ["--continue", "gamma=0.08:0.1", "--steps", "3", "--plot", str(tmp_path / "c.png")]
+    proc = symmech("gait", "rimless_wheel", *args, "--out", str(cont), cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    frame = pd.read_csv(cont, index_col=0)
+    assert list(frame.index) == pytest.approx([0.08, 0.09, 0.1])
+    assert frame["stable"].all() and (abs(frame["mult0_re"] - eta**2) <= 1e-12).all()
+    assert_one_line_error(
+        symmech("gait", "rimless_wheel", "--out", "x.xlsx", cwd=tmp_path), "--out 'x.xlsx'"
+    )

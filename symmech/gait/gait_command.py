@@ -1,6 +1,7 @@
 """``symmech gait NAME``: a built-in gait's fixed point and multipliers by each route.
 
-``symmech gait NAME|FILE [--param k=v ...] [--routes c,numpy,fd,mp,mp-cd] [--digits 30]``
+``symmech gait NAME|FILE [--param k=v ...] [--routes c,numpy,fd,mp,mp-cd] [--digits 30]
+[--out FILE]``
 prints the table of :func:`symmech.gait.report.solve_routes` (fixed point, multipliers,
 error against the mpmath reference, seconds) and the cost of the multipliers in C against
 one stride.  ``--continue gamma=a:b [--steps N] [--plot FILE]`` follows the gait from
@@ -16,11 +17,19 @@ import argparse
 from collections.abc import Callable
 from typing import Any
 
+from symmech.codegen.escape import terminal
 from symmech.errors import SymmechError
 from symmech.gait.evaluation import CompiledGait
 from symmech.gait.models import GAITS, GaitCase
 from symmech.gait.periodic import continuation, period_doublings
-from symmech.gait.report import ROUTES, format_figures, solve_routes, stride_costs
+from symmech.gait.report import (
+    ROUTES,
+    continuation_frame,
+    figures_frame,
+    format_figures,
+    solve_routes,
+    stride_costs,
+)
 
 __all__ = ["add_command", "run_gait_command"]
 
@@ -43,6 +52,9 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--steps", type=int, default=11, help="parameter values of --continue")
     p.add_argument("--plot", metavar="FILE", help="PNG of the continuation")
+    p.add_argument(
+        "--out", metavar="FILE", help="the table of routes (or of the continuation): .csv, .parquet"
+    )
 
 
 def _case(name: str) -> GaitCase:
@@ -102,12 +114,18 @@ def run_gait_command(args: argparse.Namespace, progress: Callable[[str], None]) 
     if args.continue_:
         return _continue(args, case, gait, params, progress)
     progress(f"routes {', '.join(routes)}")
+    _check_out(args.out)
     figures = solve_routes(
         gait, params, case.guess, routes, digits=args.digits, section=case.section
     )
     print(f"gait {case.name}: {case.description}")
     print("parameters: " + ", ".join(f"{k} = {v:g}" for k, v in params.items()))
     print(format_figures(figures))
+    if args.out:
+        from symmech.simulate.table import save_frame
+
+        save_frame(figures_frame(figures), args.out)
+        print(f"wrote {terminal(args.out)}")
     c = next((f for f in figures if f.route == "c"), None)
     if c is not None:
         plain, full = stride_costs(CompiledGait(gait, params), c.x, case.section)
@@ -132,7 +150,18 @@ def _bar(total: int, key: str) -> Any:
     return tqdm(total=total, file=sys.stderr, desc=f"continuation in {key}", unit="gait")
 
 
+def _check_out(path: str | None) -> None:
+    """Refuse an ``--out`` suffix the table writer cannot write, before anything runs."""
+    from pathlib import Path
+
+    from symmech.simulate.table import FRAME_FORMATS
+
+    if path and Path(path).suffix.lower() not in FRAME_FORMATS:
+        raise SymmechError(f"--out {path!r}: expected a file ending in {', '.join(FRAME_FORMATS)}")
+
+
 def _continue(args, case: GaitCase, gait, params, progress) -> int:
+    _check_out(args.out)
     key, a, b = _range(args.continue_, case)
     n = max(2, int(args.steps))
     values = [a + (b - a) * i / (n - 1) for i in range(n)]
@@ -163,12 +192,17 @@ def _continue(args, case: GaitCase, gait, params, progress) -> int:
         ms = ", ".join(f"{m.real:+.6f}{m.imag:+.6f}i" for m in p.point.multipliers)
         state = "stable" if p.point.stable else "unstable"
         print(f"{key} = {p.value:.6g}: {state}, multipliers [{ms}]")
+    if args.out:
+        from symmech.simulate.table import save_frame
+
+        save_frame(continuation_frame(points, key), args.out)
+        print(f"wrote {terminal(args.out)}")
     doublings = period_doublings(points)
     for lo, hi in doublings:
         print(f"period doubling between {key} = {lo:.6g} and {hi:.6g}")
     path = args.plot or f"{case.name}_continuation.png"
     _plot(points, key, doublings, path)
-    print(f"wrote {path}")
+    print(f"wrote {terminal(path)}")
     return 0
 
 

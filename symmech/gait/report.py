@@ -176,3 +176,41 @@ def format_figures(figures: Sequence[RouteFigure]) -> str:
 
 def as_array(values: Sequence[float]) -> np.ndarray:
     return np.asarray(values, dtype=float)
+
+
+def figures_frame(figures: Sequence[RouteFigure]) -> Any:
+    """The routes' figures as a pandas DataFrame, one row per route: seconds, error, each
+    multiplier's real and imaginary parts (``mult<k>_re``, ``mult<k>_im``) and each entry
+    of the fixed point (``x<k>``)."""
+    import pandas as pd
+
+    rows = []
+    for f in figures:
+        row: dict[str, Any] = {"route": f.route, "seconds": f.seconds, "error": f.error}
+        for k, m in enumerate(f.multipliers):
+            row[f"mult{k}_re"], row[f"mult{k}_im"] = m.real, m.imag
+        for k, v in enumerate(f.x):
+            row[f"x{k}"] = v
+        row["note"] = f.note
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("route")
+
+
+def continuation_frame(points: Sequence[Any], key: str) -> Any:
+    """A continuation (:func:`symmech.gait.periodic.continuation`) as a pandas DataFrame,
+    one row per parameter value: stable, the multipliers, the fixed point, the period,
+    and the failure when Newton found none."""
+    import pandas as pd
+
+    rows = []
+    for p in points:
+        row: dict[str, Any] = {key: p.value, "found": p.point is not None, "failure": p.failure}
+        if p.point is not None:
+            row["stable"] = p.point.stable
+            row["period"] = float(p.point.period)
+            for k, m in enumerate(p.point.multipliers):
+                row[f"mult{k}_re"], row[f"mult{k}_im"] = m.real, m.imag
+            for k, v in enumerate(p.point.x):
+                row[f"x{k}"] = float(v)
+        rows.append(row)
+    return pd.DataFrame(rows).set_index(key)
