@@ -71,6 +71,7 @@ def main(argv: list[str] | None = None) -> int:
                 case.guess,
                 ("c", "numpy", "fd", "mp", "mp-cd"),
                 digits=digits,
+                section=case.section,
             )
         }
         print(f"== {name}: {case.description}")
