@@ -48,6 +48,8 @@ class BuildContext:
     closed: bool
     omitted: list[str]
     add: Callable[..., None]
+    #: functions of the state given as expressions, ``(name, doc, matrix)`` (``extra=``)
+    extra: tuple[tuple[str, str, sp.Matrix], ...] = ()
     M: sp.Matrix = field(init=False)
     f: sp.Matrix = field(init=False)
     mu: sp.Matrix = field(init=False)
@@ -265,6 +267,22 @@ def _constrained(c: BuildContext) -> None:
 
 
 #: The scene-level builders, in the order of the generated functions.
+def _extra(c: BuildContext) -> None:
+    """The functions given as expressions (``extra=`` of
+    :func:`~symmech.codegen.plan.build_plan`), each evaluated as written at y = (q, v)."""
+    for name, doc, expr in c.extra:
+        vector = expr.cols == 1
+        c.add(
+            name,
+            "extra",
+            doc,
+            doc,
+            ("y",),
+            [vector_block("out", expr) if vector else matrix_block("out", expr)],
+            (expr.rows,) if vector else (expr.rows, expr.cols),
+        )
+
+
 SCENE_BUILDERS: tuple[Callable[[BuildContext], None], ...] = (
     _mass_matrix,
     _forcing,
@@ -274,6 +292,7 @@ SCENE_BUILDERS: tuple[Callable[[BuildContext], None], ...] = (
     _acceleration_note,
     _energy_function,
     _constrained,
+    _extra,
 )
 
 

@@ -53,8 +53,6 @@ from symmech.codegen.blocks import (
     BATCH_SUFFIX,
     Block,
     CodegenError,
-    matrix_block,
-    vector_block,
     wall_function_name,
     wall_ids,
 )
@@ -546,6 +544,7 @@ def _build(
         closed=strategy == "closed_form",
         omitted=omitted,
         add=add,
+        extra=extra,
     )
     for builder in SCENE_BUILDERS:
         builder(ctx)
@@ -553,17 +552,6 @@ def _build(
     for w, wid in zip(scene.walls, ids, strict=True):
         for wall_builder in WALL_BUILDERS:
             wall_builder(ctx, w, wid)
-    for name, doc, expr in extra:
-        vector = expr.cols == 1
-        add(
-            name,
-            "extra",
-            doc,
-            doc,
-            ("y",),
-            [vector_block("out", expr) if vector else matrix_block("out", expr)],
-            (expr.rows,) if vector else (expr.rows, expr.cols),
-        )
     if not scene.walls:
         omitted.append("psi, dpsi, impact maps: the scene has no walls")
     if ctx.closed:

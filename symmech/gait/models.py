@@ -61,7 +61,7 @@ def _point_energy(m: sp.Expr, r: sp.Matrix, q: list, qd: list, g, gamma) -> tupl
     return T, V
 
 
-def _foot_walls(hip: sp.Matrix, foot: sp.Matrix, q: list, qd: list) -> Wall:
+def _foot_wall(foot: sp.Matrix, q: list, qd: list) -> Wall:
     """The swing foot's wall: its height, plastic, its tangential velocity held."""
     vx = (foot.jacobian(q) * sp.Matrix(qd))[0]
     return Wall(foot[1], restitution=0, impulsive_constraints=[vx], name="heel")
@@ -86,7 +86,7 @@ def rimless_wheel() -> Gait:
         Q,
         kinetic_energy=T,
         potential=V,
-        walls=[_foot_walls(hub, next_foot, Q, Qd)],
+        walls=[_foot_wall(next_foot, Q, Qd)],
         parameters=[m, r, l, g, alpha, gamma],
         name="rimless_wheel_free",
     )
@@ -114,7 +114,7 @@ def _two_legs(name: str, hip_mass, leg_mass, b, l, g, gamma):
         Q,
         kinetic_energy=T,
         potential=V,
-        walls=[_foot_walls(hip, hip + _leg(t2, l), Q, Qd)],
+        walls=[_foot_wall(hip + _leg(t2, l), Q, Qd)],
         name=f"{name}_free",
     )
     return scene, (x, y, t1, t2)

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from symmech.declaration.symbols import velocities
 from symmech.declaration.wall import Wall
 from symmech.errors import SceneError
 from symmech.scene import Scene
@@ -145,19 +146,16 @@ def _transition_problems(gait: Gait, tr: Transition) -> list[str]:
             f"{label}: the reset gives {tr.reset.position.rows} coordinates and"
             f" {tr.reset.velocity.rows} velocities; mode {tr.target!r} has {target.n}"
         )
-    params = set(source.parameters) | set(target.parameters)
-    allowed = _state_symbols(source) | params
+    params = {p.name for p in (*source.parameters, *target.parameters)}
+    allowed = _state_symbols(source)
+    if tr.condition is not None and tr.condition.free_symbols & set(source.velocities):
+        out.append(f"{label}: the condition depends on velocities; it is a function of q")
     for what, exprs in (
         ("reset", tr.reset.state),
         ("condition", [] if tr.condition is None else [tr.condition]),
     ):
-        stray = {s for e in exprs for s in e.free_symbols} - allowed
-        stray = {s for s in stray if s.name not in {p.name for p in params}}
-        velocities = {s for s in stray if s in set(target.velocities) | set(target.coordinates)}
-        if what == "condition" and tr.condition is not None:
-            if tr.condition.free_symbols & set(source.velocities):
-                out.append(f"{label}: the condition depends on velocities; it is a function of q")
-        if stray - velocities or velocities:
+        stray = {s for e in exprs for s in e.free_symbols - allowed if s.name not in params}
+        if stray:
             out.append(
                 f"{label}: the {what} uses {sorted(map(str, stray))}, which are neither the"
                 f" state of mode {tr.source!r} nor parameters"
@@ -205,7 +203,7 @@ def pinned_scene(
     forces = None
     if any(e != 0 for e in F):
         Qdot = list(impact_scene.velocities)
-        qdot_sub = dict(zip(Qdot, J * sp.Matrix(_velocities(q)), strict=True))
+        qdot_sub = dict(zip(Qdot, J * sp.Matrix(velocities(tuple(q))), strict=True))
         forces = list(J.T * F.xreplace(sub).xreplace(qdot_sub))
     chosen = [w for w in impact_scene.walls if walls is None or w.name in walls]
     pulled = [
@@ -220,12 +218,6 @@ def pinned_scene(
         walls=pulled,
         name=name,
     )
-
-
-def _velocities(q: Sequence[sp.Symbol]) -> list[sp.Symbol]:
-    from symmech.declaration.symbols import velocities
-
-    return list(velocities(tuple(q)))
 
 
 def impact_reset(

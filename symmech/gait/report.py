@@ -28,7 +28,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import mpmath
-import numpy as np
 
 from symmech.errors import SymmechError
 from symmech.gait.evaluation import CompiledGait, MpGait
@@ -172,10 +171,6 @@ def format_figures(figures: Sequence[RouteFigure]) -> str:
         xs = ", ".join(f"{v:+.14f}" for v in f.x)
         rows.append(f"{f.route:7s} {f.seconds:9.4f} {err} [{mults}]  [{xs}]  {f.note}")
     return "\n".join(rows)
-
-
-def as_array(values: Sequence[float]) -> np.ndarray:
-    return np.asarray(values, dtype=float)
 
 
 def figures_frame(figures: Sequence[RouteFigure]) -> Any:

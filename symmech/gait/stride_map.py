@@ -87,13 +87,6 @@ def _stepper(fns: GaitFunctions) -> Stepper:
     return GaussLegendre(8) if fns.multiprecision else Dop853()
 
 
-def _solve(A: np.ndarray, b: np.ndarray) -> np.ndarray:
-    if A.dtype == object:
-        return np.array(mpmath.lu_solve(mpmath.matrix(A.tolist()), mpmath.matrix(list(b))).tolist(),
-                        dtype=object).ravel()  # fmt: skip
-    return np.linalg.solve(A, b)
-
-
 class _Flow:
     """The augmented field ``(f(y), Df(y) Phi)`` of one mode and its counters."""
 
