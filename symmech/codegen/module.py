@@ -46,6 +46,7 @@ params: parameter 'alpha' = 5.0 breaks 0 <= alpha <= 1
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import importlib.util
 import sys
@@ -141,6 +142,20 @@ class SceneModule:
             f"SceneModule({self.code.scene_name!r}, backend={self.backend!r},"
             f" functions={list(self._spec)})"
         )
+
+    def c_function(self, name: str) -> tuple[int, tuple[str, ...]]:
+        """The address of the generated C function ``name`` (its one-state form) and the
+        names of the arguments it takes before ``out`` (``("y", "p")``, ...; see
+        :mod:`symmech.codegen.c_signatures`), for C code that calls it through a pointer
+        (:mod:`symmech.gait.native`).  The module must stay alive while the address is
+        used."""
+        if self._library is None:
+            raise CodegenError(f"{self!r}: only a loaded C module has C functions")
+        spec = self._spec.get(name)
+        if spec is None:
+            raise CodegenError(f"{self!r} has no function {name!r}")
+        symbol = getattr(self._library, f"{self.code.stem}_{name}")
+        return ctypes.cast(symbol, ctypes.c_void_p).value or 0, tuple(spec.arguments)
 
     # -- argument handling ----------------------------------------------------------------
     def _params(self, params: object, needed: bool = True) -> np.ndarray | None:

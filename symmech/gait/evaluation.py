@@ -103,6 +103,10 @@ class GaitFunctions(ABC):
     #: True: mpmath numbers (object arrays), the Gauss-Legendre stepper
     multiprecision: bool = False
 
+    def native_stride(self) -> Any:
+        """A compiled stride loop over these functions (None: the Python loop)."""
+        return None
+
     @abstractmethod
     def array(self, values: Any) -> np.ndarray:
         """``values`` as an array of this arithmetic's numbers."""
@@ -165,11 +169,33 @@ class CompiledGait(GaitFunctions):
         :meth:`symmech.codegen.module.SceneModule.bind`)."""
         self.values = values = _parameter_values(self.gait, params)
         self._calls: dict[tuple[str, str], Callable[..., np.ndarray]] = {}
+        self._arrays: dict[str, np.ndarray] = {}
+        self._native: Any = None
         for mode, module in self._modules.items():
-            p = np.array([values[n] for n in module.parameters]) if module.parameters else None
-            bound = module.bind(p)
+            p = np.array([values[n] for n in module.parameters], dtype=float)
+            self._arrays[mode] = p
+            bound = module.bind(p if module.parameters else None)
             for name in module.functions:
                 self._calls[(mode, name)] = getattr(bound, name)
+
+    def module(self, mode: str) -> Any:
+        """The generated module of ``mode`` (a :class:`~symmech.codegen.module.SceneModule`)."""
+        return self._modules[mode]
+
+    def parameter_array(self, mode: str) -> np.ndarray:
+        """The parameter vector of ``mode``'s module, in its order (checked when bound)."""
+        return self._arrays[mode]
+
+    def native_stride(self) -> Any:
+        """The stride loop in generated C over these functions
+        (:class:`~symmech.gait.native.NativeStride`), or None for target ``"numpy"``."""
+        if self.target != "c":
+            return None
+        if self._native is None:
+            from symmech.gait.native import NativeStride
+
+            self._native = NativeStride(self)
+        return self._native
 
     def with_parameters(self, params: Mapping[str, float]) -> CompiledGait:
         """The same generated code at other parameter values (nothing is generated or

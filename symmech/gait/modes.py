@@ -83,8 +83,8 @@ class Gait:
 
     Checked when made: every guard is a wall of its source mode, every condition and
     reset a function of the source's state and the parameters, every reset of the
-    target's size, every mode has a transition out of it.  The parameters are the union
-    of the modes' (and the resets'), by name."""
+    target's size, every mode has a transition out of it and none depends on the time.
+    The parameters are the union of the modes' (and the resets'), by name."""
 
     name: str
     modes: Mapping[str, Scene]
@@ -99,9 +99,14 @@ class Gait:
             problems.append("no modes")
         for tr in self.transitions:
             problems += _transition_problems(self, tr)
-        for mode in self.modes:
+        for mode, scene in self.modes.items():
             if not any(tr.source == mode for tr in self.transitions):
                 problems.append(f"mode {mode!r} has no transition out of it")
+            if scene.time_dependent:
+                problems.append(
+                    f"mode {mode!r} depends on the time t (its potential, forces or walls):"
+                    " a stride map needs autonomous modes"
+                )
         if problems:
             raise SceneError([f"gait {self.name!r}: {p}" for p in problems])
         names: dict[str, sp.Symbol] = {}

@@ -121,7 +121,8 @@ def _guards_at(fns: GaitFunctions, mode: str, y: np.ndarray) -> dict[int, Any]:
 
 
 def _polish(fns, flow, stepper, k, t0, z0, f0, h, opts) -> tuple[Any, np.ndarray]:
-    """The event state at full order: Newton on ``g(y(t0 + s))`` with fresh steps."""
+    """The event state at full order: Newton on ``g(y(t0 + s))`` with fresh steps (at
+    most four), the state then taken at the last Newton time."""
     N = flow.N
     s = h
     z = z0
@@ -135,8 +136,9 @@ def _polish(fns, flow, stepper, k, t0, z0, f0, h, opts) -> tuple[Any, np.ndarray
         ds = -g / rate
         s = s + ds
         if abs(ds) <= 4 * fns.eps * max(abs(t0 + s), 1):
-            z = stepper.step(flow, t0, z0, f0, s, opts.rtol, opts.atol).y
             break
+    if rate != 0:  # the state at the last Newton time
+        z = stepper.step(flow, t0, z0, f0, s, opts.rtol, opts.atol).y
     return t0 + s, z
 
 
@@ -248,11 +250,24 @@ def stride(
     *,
     variational: bool = False,
     options: StrideOptions | None = None,
+    loop: str = "auto",
 ) -> StrideResult:
     """``P(x0)``: from ``x0`` just after transition ``section`` to just after its next
-    firing (and ``DP`` with ``variational=True``); see the module docstring."""
+    firing (and ``DP`` with ``variational=True``); see the module docstring.
+
+    ``loop="auto"`` runs the stride in generated C when ``fns`` has a compiled loop
+    (:meth:`~symmech.gait.evaluation.GaitFunctions.native_stride`: a
+    :class:`~symmech.gait.evaluation.CompiledGait` of target ``"c"``), else this module's
+    loop; ``"python"`` forces this module's loop (the reference of the C loop)."""
+    if loop not in ("auto", "python"):
+        raise GaitError(f"stride: loop must be 'auto' or 'python', got {loop!r}")
     opts = options or StrideOptions()
     gait = fns.gait
+    if not 0 <= section < len(gait.transitions):
+        raise GaitError(
+            f"stride: section {section!r} is not a transition of gait {gait.name!r}"
+            f" (0 .. {len(gait.transitions) - 1})"
+        )
     mode = gait.transitions[section].target
     x0 = fns.array(x0)
     if x0.shape != (fns.size(mode),):
@@ -260,6 +275,11 @@ def stride(
             f"stride: the state after {gait.transitions[section].label!r} has"
             f" {fns.size(mode)} entries (q, v of mode {mode!r}), got shape {x0.shape}"
         )
+    native = fns.native_stride() if loop == "auto" else None
+    if native is not None:
+        if not np.all(np.isfinite(x0)):
+            raise GaitError(f"stride: the initial state {x0.tolist()} is not finite")
+        return native.stride(section, x0, variational, opts)
     dim = len(x0)
     Phi = fns.array(np.eye(dim)) if variational else None
     t = fns.array([0])[0]
