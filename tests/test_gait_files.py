@@ -17,7 +17,7 @@ from symmech.scenefile import SceneFileError
 
 
 @pytest.mark.parametrize(
-    "name", ["rimless_wheel", "compass_gait", "hopper", "simplest_walker_feet"]
+    "name", ["rimless_wheel", "compass_gait", "hopper", "simplest_walker_feet", "simplest_walker"]
 )
 def test_builtin_gait_file_equals_the_python_gait(name):
     assert name in builtin_gait_files()
@@ -44,6 +44,7 @@ def _gait(tmp_path: Path, text: str) -> Path:
 
 
 WHEEL = (BUILTIN_DIR / "rimless_wheel.gait.toml").read_text()
+RELABEL = 'relabel = ["theta + 2*alpha"]'  # the file's last line
 
 
 @pytest.mark.parametrize(
@@ -63,6 +64,10 @@ WHEEL = (BUILTIN_DIR / "rimless_wheel.gait.toml").read_text()
         (('theta = "theta" }', 'theta = "theta", z = "1" }'), "unknown key 'z'"),
         (('y = "l*cos(theta)", ', ""), "missing coordinate 'y'"),
         (('impact = "free"', 'impact = "other"'), "must be the one mode"),
+        ((RELABEL, RELABEL + "\n[limit]\nnope = 0"), "'nope' is not one of its parameters"),
+        ((RELABEL, RELABEL + '\n[limit]\nm = "0"'), "limit.m: expected a finite number"),
+        ((RELABEL, RELABEL + "\n[limit]\nm = inf"), "limit.m: expected a finite number"),
+        (("format = 1", "limit = 3\nformat = 1"), "limit: expected a table"),
     ],
 )
 def test_hostile_gait_files_are_refused_naming_the_field(tmp_path, edit, message):
@@ -73,6 +78,26 @@ def test_hostile_gait_files_are_refused_naming_the_field(tmp_path, edit, message
         read_gait(path)
     assert message in str(info.value)
     assert str(path) in str(info.value)
+
+
+def test_a_limit_declared_in_a_file_is_garcias_model():
+    """The file's simplest walker (the feet's limit) has Garcia et al.'s field, eqs. 3-5:
+    theta'' = sin(theta - gamma), phi'' = theta'' + theta'^2 sin phi - cos(theta - gamma)
+    sin phi, with theta = theta1 and phi = theta1 - theta2."""
+    import sympy as sp
+
+    gait = read_gait("simplest_walker").gait
+    scene = gait.modes["stance"]
+    t1, t2 = scene.coordinates
+    w1, _ = scene.velocities
+    gamma = next(p for p in gait.parameters if p.name == "gamma")
+    acc = scene.acceleration()
+    theta_dd = sp.sin(t1 - gamma)
+    phi = t1 - t2
+    phi_dd = theta_dd + w1**2 * sp.sin(phi) - sp.cos(t1 - gamma) * sp.sin(phi)
+    assert sp.simplify(acc[0] - theta_dd) == 0
+    assert sp.simplify((acc[0] - acc[1]) - phi_dd) == 0
+    assert [p.name for p in gait.parameters] == ["gamma"]
 
 
 def test_not_a_gait_file(tmp_path):

@@ -31,6 +31,9 @@ safe parser (:func:`symmech.declaration.expressions.to_expression`, never evalua
     relabel = ["theta + 2*alpha"]   # ... then the target's coordinates
     # or: position = [...] and velocity = [...], the target state in the source's state
 
+    [limit]                         # optional: the gait in a parameter's limit
+    beta = 0                        # (symmech.gait.limits.limit_gait)
+
 The impact scene of a transition is the scene its source mode is pinned from (or the
 source mode's own scene): the embedding is the mode's.  The parameters' default values are
 the scene files'; a parameter given two different values is refused.  Errors are
@@ -39,6 +42,7 @@ the scene files'; a parameter given two different values is refused.  Errors are
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import tomllib
@@ -58,7 +62,10 @@ from symmech.scenefile import SceneFileError, read_scene
 
 __all__ = ["GaitFile", "builtin_gait_files", "read_gait"]
 
-_TOP_KEYS = {"format", "name", "description", "section", "guess", "scenes", "modes", "transitions"}
+_TOP_KEYS = {
+    "format", "name", "description", "section", "guess", "scenes", "modes", "transitions",
+    "limit",
+}  # fmt: skip
 _MODE_KEYS = {"scene", "pinned", "coordinates", "embedding", "walls", "guards"}
 _TRANSITION_KEYS = {
     "name", "source", "target", "guard", "condition", "impact", "wall", "relabel",
@@ -257,6 +264,25 @@ class _Reader:
         return Transition(t["source"], t["target"], t["guard"], reset, condition,
                           name=str(t.get("name", "")))  # fmt: skip
 
+    def limits(self, gait: Gait, table: object) -> Gait:
+        """``gait`` in the limits of ``[limit]`` (``beta = 0``: feet of vanishing mass),
+        taken in the table's order (:func:`symmech.gait.limits.limit_gait`)."""
+        from symmech.gait.limits import limit_gait
+
+        for key, value in self.keys(table, set(table) if isinstance(table, dict) else set(),
+                                    "limit").items():  # fmt: skip
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not (number and math.isfinite(value)):
+                self.fail(f"limit.{key}", f"expected a finite number, got {value!r}")
+                self.check()
+            try:
+                gait = limit_gait(gait, key, sp.nsimplify(value), name=gait.name)
+            except SymmechError as exc:
+                self.fail(f"limit.{key}", str(exc))
+                self.check()
+        self.check()
+        return gait
+
     def read(self) -> GaitFile:
         data = self.keys(self.data, _TOP_KEYS, "file")
         if data.get("format") != 1:
@@ -287,6 +313,8 @@ class _Reader:
                         tuple(t for t in transitions if t is not None))  # fmt: skip
         except SymmechError as exc:
             raise SceneFileError([f"{self.source}: {exc}"], path=self.source) from None
+        gait = self.limits(gait, data.get("limit", {}))
+        defaults = {k: v for k, v in defaults.items() if k in {p.name for p in gait.parameters}}
         section = 0
         if "section" in data:
             names = [tr.name for tr in gait.transitions]

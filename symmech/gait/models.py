@@ -35,6 +35,7 @@ import sympy as sp
 
 from symmech.declaration.symbols import coordinates, velocities
 from symmech.declaration.wall import Wall
+from symmech.gait.limits import limit_gait
 from symmech.gait.modes import Gait, Reset, Transition, impact_reset, pinned_scene
 from symmech.scene import Scene
 
@@ -164,45 +165,9 @@ def simplest_walker_limit() -> Gait:
     and the reset as the limit of its closed-form heel strike.  (Garcia et al., eqs. 3-5,
     in their variables theta = theta1, phi = theta1 - theta2: ``theta'' = sin(theta -
     gamma)``, ``phi'' = theta'' + theta'^2 sin phi - cos(theta - gamma) sin phi``; heel
-    strike ``theta+ = -theta-``, ``theta'+ = cos(2 theta-) theta'-``.)"""
-    finite = simplest_walker()
-    beta = next(p for p in finite.parameters if p.name == "beta")
-    mode = finite.modes["stance"]
-    acc = sp.Matrix(mode.acceleration()).applyfunc(lambda e: _limit(e, beta))
-    q = list(mode.coordinates)
-    limit_mode = Scene(
-        q,
-        metric=sp.eye(2),
-        forces=list(acc),
-        walls=list(_plain_walls(mode)),
-        name="simplest_walker_limit",
-    )
-    tr = finite.transitions[0]
-    reset = Reset(
-        position=tr.reset.position.applyfunc(lambda e: _limit(e, beta)),
-        velocity=tr.reset.velocity.applyfunc(lambda e: _limit(e, beta)),
-        impact=tr.reset.impact + " (beta -> 0)",
-        dissipative=tr.reset.dissipative,
-    )
-    return Gait(
-        "simplest_walker_limit",
-        {"stance": limit_mode},
-        (Transition("stance", "stance", "strike", reset, condition=tr.condition),),
-    )
-
-
-def _plain_walls(scene: Scene) -> list[Wall]:
-    return [Wall(w.psi, restitution=w.restitution, name=w.name) for w in scene.walls]
-
-
-def _limit(e: sp.Expr, beta: sp.Symbol) -> sp.Expr:
-    """``lim_{beta -> 0} e`` for ``e`` rational in beta with a finite limit: the
-    numerator and denominator cancelled, then beta = 0 (``sympy.limit`` otherwise)."""
-    e = sp.cancel(sp.together(e))
-    den = sp.fraction(e)[1]
-    if den.subs(beta, 0) != 0:
-        return sp.simplify(e.subs(beta, 0))
-    return sp.simplify(sp.limit(e, beta, 0))
+    strike ``theta+ = -theta-``, ``theta'+ = cos(2 theta-) theta'-``.)  The limit is
+    :func:`symmech.gait.limits.limit_gait` of :func:`simplest_walker`."""
+    return limit_gait(simplest_walker(), "beta", 0, name="simplest_walker_limit")
 
 
 def hopper() -> Gait:
