@@ -9,6 +9,8 @@ The multipliers' agreement with mpmath central differences is in test_gait_refer
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -149,3 +151,39 @@ def test_limits_of_a_gait_are_finite_or_refused():
         limit_gait(_ball(lambda y: g), "m", 0)
     with pytest.raises(SceneError, match="'k' is not one of its parameters"):
         limit_gait(gait, "k")
+
+
+def test_the_recorded_motion_is_a_solution_in_both_loops():
+    """Between consecutive rows of one mode the record follows the mode's flow (checked
+    by SciPy's DOP853 at rtol 1e-12 from each row to the next), and both loops record the
+    same events.  (Their accepted steps may differ where a step's error estimate is 1 to
+    rounding, so the rows between events are compared through the flow, not one by one.)"""
+    from scipy.integrate import solve_ivp
+
+    spec = GAITS["hopper"]  # two modes of different sizes: rows padded with NaN
+    fns = CompiledGait(spec.build(), spec.parameters)
+    a = stride(fns, spec.section, spec.guess, record=True, loop="python")
+    b = stride(fns, spec.section, spec.guess, record=True)
+    for out in (a, b):
+        rec = out.trajectory
+        # the start, each accepted step but those cut by an event, each event before/after
+        assert rec.shape[0] == 1 + (out.steps - len(out.events)) + 2 * len(out.events)
+        assert np.all(np.diff(rec[:, 0]) >= 0) and set(rec[:, 1]) == {0.0, 1.0}
+        np.testing.assert_array_equal(rec[-1, 2 : 2 + len(out.x)], out.x)
+        worst = 0.0
+        for r0, r1 in itertools.pairwise(rec):
+            if r0[1] != r1[1] or r1[0] == r0[0]:
+                continue  # a jump
+            mode = fns.mode_names[int(r0[1])]
+            n = fns.size(mode)
+            sol = solve_ivp(
+                lambda t, y, m=mode: fns.rhs(m, y), (r0[0], r1[0]), r0[2 : 2 + n],
+                method="DOP853", rtol=1e-12, atol=1e-12,
+            )  # fmt: skip
+            worst = max(worst, float(np.max(np.abs(sol.y[:, -1] - r1[2 : 2 + n]))))
+        assert worst <= 1e-9
+    assert len(a.events) == len(b.events)
+    for (ka, ta, ya), (kb, tb, yb) in zip(a.events, b.events, strict=True):
+        assert ka == kb and abs(ta - tb) <= 1e-12
+        _close(ya, yb, 1e-12)
+    assert stride(fns, spec.section, spec.guess).trajectory is None

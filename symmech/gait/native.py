@@ -111,6 +111,7 @@ def _library(compiler: str | None) -> Any:
         ctypes.POINTER(_Mode), ctypes.c_int, ctypes.POINTER(_Transition), ctypes.c_int,
         ctypes.c_int, dp, ctypes.c_int, ctypes.POINTER(_Options),
         dp, dp, dp, dp, ctypes.POINTER(ctypes.c_int), dp, dp, ctypes.POINTER(ctypes.c_long), dp,
+        dp, ctypes.c_long,
     ]  # fmt: skip
     fn.restype = ctypes.c_int
     return lib, fn
@@ -163,9 +164,25 @@ class NativeStride:
         return _Fn(address, kind)
 
     def stride(
-        self, section: int, x0: np.ndarray, variational: bool, options: StrideOptions
+        self,
+        section: int,
+        x0: np.ndarray,
+        variational: bool,
+        options: StrideOptions,
+        record: bool = False,
     ) -> StrideResult:
-        """``P(x0)`` (and ``DP``): :func:`symmech.gait.stride_map.stride` in C."""
+        """``P(x0)`` (and ``DP``; the motion with ``record``):
+        :func:`symmech.gait.stride_map.stride` in C."""
+        rows = 1024 if record else 0
+        while True:
+            out, needed = self._call(section, x0, variational, options, rows)
+            if needed <= rows:
+                return out
+            rows = needed  # the same stride again, into a record that holds it all
+
+    def _call(
+        self, section: int, x0: np.ndarray, variational: bool, options: StrideOptions, rows: int
+    ) -> tuple[StrideResult, int]:
         fns, gait = self.fns, self.fns.gait
         dim = fns.size(gait.transitions[section].target)
         x0 = np.ascontiguousarray(x0, dtype=float)
@@ -174,8 +191,9 @@ class NativeStride:
         cap = max(int(options.max_events), 1)
         ev_k = np.zeros(cap, dtype=np.intc)
         ev_t, ev_y = np.empty(cap), np.empty((cap, self._largest))
-        counters = np.zeros(3, dtype=np.int_)
+        counters = np.zeros(4, dtype=np.int_)
         detail = np.zeros(4)
+        rec = np.empty((rows, self._largest + 2)) if rows else None
         opts = _Options(
             options.rtol, options.atol, options.t_max, options.h0,
             options.max_events, options.max_steps,
@@ -186,13 +204,15 @@ class NativeStride:
             _pointer(mono), _pointer(period), ev_k.ctypes.data_as(ctypes.POINTER(ctypes.c_int)),
             _pointer(ev_t), _pointer(ev_y),
             counters.ctypes.data_as(ctypes.POINTER(ctypes.c_long)), _pointer(detail),
+            None if rec is None else _pointer(rec), rows,
         )  # fmt: skip
         if status != 0:
             raise GaitError(self._message(STATUSES[status], detail, section, options))
         n = int(counters[2])
         sizes = [fns.size(gait.transitions[int(k)].source) for k in ev_k[:n]]
         events = [(int(ev_k[i]), float(ev_t[i]), ev_y[i, : sizes[i]].copy()) for i in range(n)]
-        return StrideResult(
+        recorded = int(counters[3])
+        out = StrideResult(
             x,
             DP if variational else None,
             float(period[0]),
@@ -200,7 +220,9 @@ class NativeStride:
             int(counters[0]),
             int(counters[1]),
             mono if variational else None,
+            None if rec is None else rec[:recorded].copy(),
         )
+        return out, recorded if rec is not None else 0
 
     def _message(self, status: str, d: np.ndarray, section: int, options: StrideOptions) -> str:
         """The failure of a stride in the words of the Python loop's :class:`GaitError`."""

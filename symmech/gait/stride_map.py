@@ -81,6 +81,10 @@ class StrideResult:
     #: ``Xi_k Phi_k ... Xi_1 Phi_1`` (the monodromy matrix: the multipliers and the
     #: trivial 1 of the flow's direction); ``DP`` has 0 in place of that 1
     monodromy: np.ndarray | None = None
+    #: with ``record=True``: rows ``(t, mode index, y padded with NaN to the largest
+    #: mode's size)`` at the start, every accepted step's end and each event's state
+    #: before and after its jump
+    trajectory: np.ndarray | None = None
 
 
 def _stepper(fns: GaitFunctions) -> Stepper:
@@ -215,6 +219,7 @@ def _flow_until_event(fns, mode, t0, z0, columns, opts, stats):
             return k, t_event, z_event
         for k, g in values_end.items():
             armed[k] = armed[k] or g > _arm_level(fns)
+        _record(fns, stats, t + h, mode, y_end)
         t, z, f, values = t + h, step.y, step.f, values_end
         h = _controller(h, step.error, order, fns)
     stats["nfev"] += flow.nfev
@@ -222,6 +227,15 @@ def _flow_until_event(fns, mode, t0, z0, columns, opts, stats):
         f"mode {mode!r}: no transition fired within t_max = {opts.t_max} from t = {float(t0):.6g}"
         f" (state {[float(x) for x in z0[:N]]})"
     )
+
+
+def _record(fns: GaitFunctions, stats: dict[str, Any], t: Any, mode: str, y: np.ndarray) -> None:
+    """A row ``(t, mode index, y padded with NaN)`` of the record, when there is one."""
+    rows = stats.get("rows")
+    if rows is not None:
+        width = max(fns.size(m) for m in fns.mode_names)
+        row = [t, fns.mode_names.index(mode), *y[: fns.size(mode)]]
+        rows.append(row + [np.nan] * (width + 2 - len(row)))
 
 
 def saltation(
@@ -251,6 +265,7 @@ def stride(
     variational: bool = False,
     options: StrideOptions | None = None,
     loop: str = "auto",
+    record: bool = False,
 ) -> StrideResult:
     """``P(x0)``: from ``x0`` just after transition ``section`` to just after its next
     firing (and ``DP`` with ``variational=True``); see the module docstring.
@@ -258,7 +273,8 @@ def stride(
     ``loop="auto"`` runs the stride in generated C when ``fns`` has a compiled loop
     (:meth:`~symmech.gait.evaluation.GaitFunctions.native_stride`: a
     :class:`~symmech.gait.evaluation.CompiledGait` of target ``"c"``), else this module's
-    loop; ``"python"`` forces this module's loop (the reference of the C loop)."""
+    loop; ``"python"`` forces this module's loop (the reference of the C loop).
+    ``record=True`` keeps the motion (:attr:`StrideResult.trajectory`)."""
     if loop not in ("auto", "python"):
         raise GaitError(f"stride: loop must be 'auto' or 'python', got {loop!r}")
     opts = options or StrideOptions()
@@ -279,12 +295,13 @@ def stride(
     if native is not None:
         if not np.all(np.isfinite(x0)):
             raise GaitError(f"stride: the initial state {x0.tolist()} is not finite")
-        return native.stride(section, x0, variational, opts)
+        return native.stride(section, x0, variational, opts, record)
     dim = len(x0)
     Phi = fns.array(np.eye(dim)) if variational else None
     t = fns.array([0])[0]
     y = x0
-    stats = {"nfev": 0, "steps": 0}
+    stats: dict[str, Any] = {"nfev": 0, "steps": 0, "rows": [] if record else None}
+    _record(fns, stats, t, mode, y)
     events: list[tuple[int, Any, np.ndarray]] = []
     monodromy = None
     for _ in range(opts.max_events):
@@ -292,6 +309,7 @@ def stride(
         z = y if Phi is None else np.concatenate([y, Phi.ravel()])
         k, t, z = _flow_until_event(fns, mode, t, z, dim if variational else 0, opts, stats)
         y_minus = z[:N]
+        _record(fns, stats, t, mode, y_minus)
         events.append((k, t, y_minus))
         if variational:
             Phi_flow = z[N:].reshape(N, dim)
@@ -303,6 +321,11 @@ def stride(
         else:
             y = fns.reset(k, y_minus)
         mode = gait.transitions[k].target
+        _record(fns, stats, t, mode, y)
         if k == section:
-            return StrideResult(y, Phi, t, events, stats["nfev"], stats["steps"], monodromy)
+            rows = stats["rows"]
+            trajectory = None if rows is None else fns.array(rows)
+            return StrideResult(
+                y, Phi, t, events, stats["nfev"], stats["steps"], monodromy, trajectory
+            )
     raise GaitError(f"stride: transition {section} did not fire again in {opts.max_events} events")
