@@ -8,7 +8,9 @@ one stride.  ``--continue gamma=a:b [--steps N] [--plot FILE]`` follows the gait
 ``a`` to ``b`` (natural continuation, :func:`symmech.gait.periodic.continuation`), prints
 each fixed point's multipliers and writes a PNG of their moduli and real parts (default
 ``NAME_continuation.png``), with the parameter intervals where a multiplier crosses -1
-(period doubling) marked.
+(period doubling) marked.  ``--walk N [--start X,...] [--out FILE] [--plot FILE]`` walks
+N strides in C (:func:`symmech.gait.walking.walk`) and prints each one with its distance to
+the fixed point; the exit code is 1 when the walker falls.
 """
 
 from __future__ import annotations
@@ -51,9 +53,17 @@ def add_command(sub: Any, common: argparse.ArgumentParser) -> None:
         "--continue", dest="continue_", metavar="P=A:B", help="follow the gait in P from A to B"
     )
     p.add_argument("--steps", type=int, default=11, help="parameter values of --continue")
-    p.add_argument("--plot", metavar="FILE", help="PNG of the continuation")
+    p.add_argument("--walk", type=int, metavar="N", help="walk N strides (in C) and print each one")
     p.add_argument(
-        "--out", metavar="FILE", help="the table of routes (or of the continuation): .csv, .parquet"
+        "--start",
+        metavar="X,...",
+        help="the state just after the section where --walk starts (default: the gait's guess)",
+    )
+    p.add_argument("--plot", metavar="FILE", help="PNG of the continuation, or of the walk")
+    p.add_argument(
+        "--out",
+        metavar="FILE",
+        help="the table of routes (or of the continuation, or of the strides): .csv, .parquet",
     )
 
 
@@ -113,6 +123,8 @@ def run_gait_command(args: argparse.Namespace, progress: Callable[[str], None]) 
     gait = case.build()
     if args.continue_:
         return _continue(args, case, gait, params, progress)
+    if args.walk is not None:
+        return _walk(args, case, gait, params, progress)
     progress(f"routes {', '.join(routes)}")
     _check_out(args.out)
     figures = solve_routes(
@@ -134,6 +146,87 @@ def run_gait_command(args: argparse.Namespace, progress: Callable[[str], None]) 
             f" {full * 1e3:.3f} ms ({full / plain:.2f}x)"
         )
     return 0
+
+
+def _start(text: str | None, case: GaitCase) -> list[float]:
+    from symmech.simulate.arguments import number
+
+    if text is None:
+        return list(case.guess)
+    values = [number(v, "--start") for v in text.split(",")]
+    if len(values) != len(case.guess):
+        raise SymmechError(
+            f"--start {text!r}: expected {len(case.guess)} numbers (the state just after the"
+            " section transition)"
+        )
+    return values
+
+
+def _walk(args, case: GaitCase, gait, params, progress) -> int:
+    """``--walk N``: the strides from ``--start``, each with its distance to the gait's
+    fixed point (found first, in C), and the ratio of successive distances (near a
+    stable gait it tends to the leading multiplier's modulus)."""
+    import numpy as np
+
+    from symmech.gait.periodic import fixed_point
+    from symmech.gait.walking import walk
+
+    _check_out(args.out)
+    if not 1 <= args.walk <= 100_000:
+        raise SymmechError(f"--walk {args.walk}: choose 1 to 100000 strides")
+    fns = CompiledGait(gait, params)
+    start = _start(args.start, case)
+    progress(f"the fixed point of {case.name}")
+    try:
+        star = fixed_point(fns, case.section, case.guess).x
+    except SymmechError as exc:
+        star = None
+        print(f"no fixed point from the guess ({exc}): distances left out")
+    progress(f"walking {args.walk} strides")
+    w = walk(fns, case.section, start, args.walk, record=bool(args.plot))
+    print(f"gait {case.name}: {args.walk} strides from {start}")
+    print("stride          t      period   distance   ratio   state just after the section")
+    last = None
+    for k, (t, x) in enumerate(zip(w.times, w.sections, strict=True)):
+        d = None if star is None else float(np.max(np.abs(x - star)))
+        ratio = f"{d / last:7.4f}" if d is not None and last else "      -"
+        period = f"{w.periods[k - 1]:10.6f}" if k else "         -"
+        dist = f"{d:10.3e}" if d is not None else "         -"
+        xs = ", ".join(f"{v:+.10f}" for v in x)
+        print(f"{k:6d} {t:10.6f} {period} {dist} {ratio}   [{xs}]")
+        last = d
+    if w.stopped:
+        print(f"stopped: {w.stopped}")
+    if args.out:
+        from symmech.simulate.table import save_frame
+
+        save_frame(w.to_frame(), args.out)
+        print(f"wrote {terminal(args.out)}")
+    if args.plot:
+        _plot_walk(w, gait, args.plot)
+        print(f"wrote {terminal(args.plot)}")
+    return 0 if not w.stopped else 1
+
+
+def _plot_walk(w, gait, path: str) -> None:
+    """Each mode's coordinates against time over the walk, the events as vertical lines."""
+    from symmech.simulate.plotting import new_figure, save_figure
+
+    fig, ax = new_figure(1, 1, height=4.0)
+    rec = w.trajectory
+    for j, mode in enumerate(w.modes):
+        names = [str(q) for q in gait.modes[mode].coordinates]
+        rows = rec[rec[:, 1] == j]
+        for i, name in enumerate(names):
+            label = name if len(w.modes) == 1 else f"{name} ({mode})"
+            ax.plot(rows[:, 0], rows[:, 2 + i], ".", ms=2, label=label)
+    for _, t, _ in w.events:
+        ax.axvline(t, color="0.8", lw=0.6, zorder=0)
+    ax.set_xlabel("t")
+    ax.set_ylabel("coordinates")
+    ax.set_title(f"{w.gait}: {len(w.times) - 1} strides")
+    ax.legend(fontsize="small")
+    save_figure(fig, path)
 
 
 def _bar(total: int, key: str) -> Any:

@@ -6,9 +6,9 @@ the saltation matrix at each jump, the return map's Jacobian) with DOP853's coef
 printed in; it does not depend on the gait, so it is rendered and compiled once (cached by
 content, :func:`symmech.codegen.build.compile_library`).  A gait's own functions (each
 mode's ``rhs`` and ``jacobian``; each transition's guard, its gradient, the condition,
-the reset and its Jacobian) are the generated C of a :class:`~symmech.gait.evaluation.
-CompiledGait`, passed by address with the parameter vector of their mode
-(:class:`NativeStride`): one call of the C function is one stride.
+the reset and its Jacobian) are the generated C of a
+:class:`~symmech.gait.evaluation.CompiledGait`, passed by address with the parameter
+vector of their mode (:class:`NativeStride`): one call of the C function is one stride.
 
 The structures below mirror the template's ``sm_fn``, ``sm_mode``, ``sm_transition`` and
 ``sm_options``; the status and function codes are defined here once and rendered into the
@@ -19,17 +19,15 @@ from __future__ import annotations
 
 import ctypes
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from symmech.codegen.backends import environment, templates_used
 from symmech.codegen.build import compile_library, load_library
+from symmech.gait import evaluation
 from symmech.gait.stride_map import GaitError, StrideOptions, StrideResult
 from symmech.simulate.steppers import Dop853, c_tableau
-
-if TYPE_CHECKING:
-    from symmech.gait.evaluation import CompiledGait
 
 __all__ = ["NativeStride", "stride_library_source"]
 
@@ -126,7 +124,7 @@ class NativeStride:
     (a :class:`~symmech.gait.evaluation.CompiledGait` of target ``"c"``, bound to its
     parameters)."""
 
-    def __init__(self, gait: CompiledGait, compiler: str | None = None):
+    def __init__(self, gait: evaluation.CompiledGait, compiler: str | None = None):
         if gait.target != "c":
             raise GaitError(f"gait {gait.gait.name!r}: the C stride needs target 'c'")
         self.fns = gait
