@@ -10,6 +10,7 @@ The multipliers' agreement with mpmath central differences is in test_gait_refer
 from __future__ import annotations
 
 import itertools
+import re
 
 import numpy as np
 import pytest
@@ -132,6 +133,30 @@ def test_limits_and_bad_states_are_clear_errors():
         stride(fns, 3, [0.0, 1.0])
     with pytest.raises(GaitError, match="loop must be"):
         stride(fns, 0, [0.0, 1.0], loop="c")
+    for section in (True, 0.0, "0", -1):
+        with pytest.raises(GaitError, match="is not a transition"):
+            stride(fns, section, [0.0, 1.0])
+    for state in (["a", 1.0], [[0.0, 1.0]], [1j, 0.0], None):
+        with pytest.raises(GaitError):
+            stride(fns, 0, state)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        ({"rtol": 0.0}, "rtol = 0.0 must be a finite number > 0"),
+        ({"atol": float("nan")}, "atol = nan"),
+        ({"t_max": float("inf")}, "t_max = inf"),
+        ({"h0": -1e-3}, "h0 = -0.001"),
+        ({"max_events": 10**9}, "max_events = 1000000000 must be a whole number in 1 .. 10000"),
+        ({"max_steps": 0}, "max_steps = 0"),
+        ({"max_steps": 2.5}, "max_steps = 2.5"),
+        ({"rtol": True}, "rtol = True"),
+    ],
+)
+def test_stride_options_are_checked(options, message):
+    with pytest.raises(GaitError, match=re.escape(message)):
+        StrideOptions(**options)
 
 
 def test_a_mode_that_depends_on_time_is_refused():

@@ -30,6 +30,7 @@ from the :class:`~symmech.gait.evaluation.GaitFunctions` it is given.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -64,6 +65,21 @@ class StrideOptions:
     max_events: int = 20
     h0: float = 1e-3
     max_steps: int = 100_000
+
+    def __post_init__(self) -> None:
+        problems = []
+        for name in ("rtol", "atol", "t_max", "h0"):
+            value = getattr(self, name)
+            real = isinstance(value, (int, float)) and not isinstance(value, bool)
+            if not (real and math.isfinite(value) and value > 0):
+                problems.append(f"{name} = {value!r} must be a finite number > 0")
+        for name, top in (("max_events", 10_000), ("max_steps", 10**9)):
+            value = getattr(self, name)
+            whole = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+            if not (whole and 1 <= value <= top):
+                problems.append(f"{name} = {value!r} must be a whole number in 1 .. {top}")
+        if problems:
+            raise GaitError("StrideOptions: " + "; ".join(problems))
 
 
 @dataclass
@@ -279,13 +295,19 @@ def stride(
         raise GaitError(f"stride: loop must be 'auto' or 'python', got {loop!r}")
     opts = options or StrideOptions()
     gait = fns.gait
-    if not 0 <= section < len(gait.transitions):
+    whole = isinstance(section, (int, np.integer)) and not isinstance(section, bool)
+    if not (whole and 0 <= section < len(gait.transitions)):
         raise GaitError(
             f"stride: section {section!r} is not a transition of gait {gait.name!r}"
             f" (0 .. {len(gait.transitions) - 1})"
         )
     mode = gait.transitions[section].target
-    x0 = fns.array(x0)
+    try:
+        x0 = fns.array(x0)
+    except (TypeError, ValueError) as exc:
+        raise GaitError(
+            f"stride: the initial state {x0!r} is not an array of numbers ({exc})"
+        ) from None
     if x0.shape != (fns.size(mode),):
         raise GaitError(
             f"stride: the state after {gait.transitions[section].label!r} has"
