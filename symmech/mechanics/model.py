@@ -11,6 +11,7 @@ from typing import Any
 import sympy as sp
 
 from symmech.errors import SceneError, SymmechWarning
+from symmech.mechanics.refusals import refuse_non_smooth
 
 __all__ = ["Model", "mechanics"]
 
@@ -65,11 +66,15 @@ class Model:
     holonomic: list[sp.Expr]
     origin: Any = None
     lagrangian: sp.Expr | None = None  # L = T - V of a Lagrange model (its own, or its bodies')
+    #: the model's attributes that hold each part, for the refusals ("kinematics":
+    #: q_dot = S u; "constraints": velocity and configuration constraints)
+    names: dict[str, str]
 
     def __init__(self, model: object):
         self.partials: dict = {}
         self.velocity_rows, self.velocity_offsets = [], []
         self.holonomic = []
+        self.names = {}
         kind = model_kind(model)
         if kind == "kane":
             self._kane(model)
@@ -102,6 +107,10 @@ class Model:
                 "from_mechanics: the KanesMethod has no bodies: its kanes_equations(bodies,"
                 " loads) were never formed and no bodies= were given; form them first"
             )
+        self.names = {
+            "kinematics": "KanesMethod.kd_eqs",
+            "constraints": "KanesMethod.velocity_constraints / configuration_constraints",
+        }
         self.q = list(k.q)
         self.frame = k._inertial
         self.bodies = list(k.bodies or [])
@@ -116,6 +125,10 @@ class Model:
         """A LagrangesMethod: its equations come from its Lagrangian (bodies= only records
         the bodies, their potential energies are in L) and its loads; the q_dot basis."""
         t = mechanics().dynamicsymbols._t
+        self.names = {
+            "lagrangian": f"the Lagrangian of the {source}",
+            "constraints": f"{source}: hol_coneqs / nonhol_coneqs",
+        }
         self.q = list(lm.q)
         self.frame = lm.inertial
         self.bodies = list(lm._bodies or [])
@@ -147,6 +160,11 @@ class Model:
             self._lagrange(s.eom_method, "System (eom_method=LagrangesMethod)")
             self.origin = s.fixed_point
             return
+        self.names = {
+            "kinematics": "System.kdes",
+            "lagrangian": "the Lagrangian of the System's bodies",
+            "constraints": "System.nonholonomic_constraints / holonomic_constraints",
+        }
         self.q = list(s.q)
         self.frame = s.frame
         self.origin = s.fixed_point
@@ -196,7 +214,15 @@ class Model:
                 f" {list(offset)} is left over (a part free of the speeds)"
             )
         if any(a.has(*u) or a.has(*qd) for a in S):
-            raise SceneError("from_mechanics: q_dot = S u with S depending on the speeds")
+            raise SceneError(
+                f"from_mechanics: {self.names['kinematics']}: q_dot = S u with S depending on"
+                " the speeds; symmech needs q_dot linear in the speeds"
+            )
+        refuse_non_smooth(
+            S,
+            f"{self.names['kinematics']} (q_dot = S(q) u)",
+            "write the kinematic differential equations without them",
+        )
         # speeds no kinematic equation reaches get an ignorable coordinate
         extra = [r for r in range(len(u)) if all(S[i, r] == 0 for i in range(S.rows))]
         if S.rows > len(u):
