@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import sympy as sp
+from codegen_support import require_c_compiler
 from mechanics_support import (
     consistent_speeds,
     model_accelerations,
@@ -170,19 +171,42 @@ def _cart_with_hinged_pendulum():
     return km, {mA: 1.0, mC: 2.0, a: 0.5, Iz: 0.4, g: 9.81}
 
 
-def test_metric_positive_for_physical_values_only_is_checked_at_run_time():
+@pytest.mark.parametrize("target", ["numpy", "c"])
+def test_metric_positive_for_physical_values_only_is_checked_at_run_time(target):
+    """Accepted (every symbol positive=True, the sampler keeps them positive), and the
+    generated code's Cholesky factorisation of g (SYMMECH_NOT_SPD in C) is the check:
+    at physical values its rhs is the model's own, at I_z < m_A a^2 a NumericalError."""
+    if target == "c":
+        require_c_compiler()
     km, values = _cart_with_hinged_pendulum()
     scene = sm.Scene.from_mechanics(km)
     assert scene.declaration.metric_checked_at_run_time
     assert "checked at run time" in repr(scene)
     assert worst_difference(km, scene, values) < 1e-10
-    mod = sm.codegen.generate(scene, target="numpy").load()
+    mod = sm.codegen.generate(scene, target=target).load()
     params = {str(k): v for k, v in values.items()}
-    state = np.array([0.1, 0.2, 0.3, -0.4])
-    assert np.all(np.isfinite(mod.rhs(state, params)))
+    qs, us = [0.1, 0.2], [0.3, -0.4]
+    theirs = model_accelerations(km, values, qs, us, model_basis(km))
+    ours = mod.rhs(np.array([*qs, *us]), params)
+    assert np.max(np.abs(ours[2:] - theirs)) < 1e-10
     # (m_A + m_C) I_z < (m_A a cos theta)^2: g indefinite, the Cholesky factorisation fails
-    with pytest.raises(sm.codegen.NumericalError):
+    with pytest.raises(
+        sm.codegen.NumericalError, match=r"^rhs: a matrix that must be positive definite is not"
+    ):
         mod.rhs(np.array([0.1, 0.0, 0.3, -0.4]), {**params, "I_z": 0.05})
+
+
+def test_a_declared_hinge_metric_with_positive_symbols_is_accepted_for_a_run_time_check():
+    """The same metric declared by hand: positive symbols are sampled positive, and g is
+    positive definite for some of their values (I_z >= m_A a^2), so it is accepted."""
+    x, th = sm.coordinates("x theta")
+    mA, mC, a, Iz = sp.symbols("m_A m_C a I_z", positive=True)
+    g = sp.Matrix([[mA + mC, a * mA * sp.cos(th)], [a * mA * sp.cos(th), Iz]])
+    scene = sm.Scene((x, th), metric=g, name="hinge")
+    assert scene.declaration.metric_checked_at_run_time
+    # and it is indefinite for other positive values: a run-time check is needed
+    at = {mA: 1, mC: 1, a: 1, Iz: sp.Rational(1, 10), th: 0}
+    assert g.xreplace(at).det() < 0
 
 
 def test_a_metric_indefinite_for_every_parameter_value_is_still_refused():
