@@ -1,0 +1,668 @@
+"""The rest of the table of :mod:`mechanics_table`: models from sympy's docstrings (the
+joints' and System's examples, their equations formed as a user then forms them), from
+PyDy's examples (``pydy-0.9.4.tar.gz``, ``docs/examples/*.rst``, copied without the
+simulation and plotting), and the models of issue 25 (actuators, bodies' potential
+energies, a hinge's inertia, auxiliary speeds, ...)."""
+
+# The builders are copied as their sources write them, unused names included.
+# ruff: noqa: RUF059
+
+from __future__ import annotations
+
+import sympy as sm
+import sympy.physics.mechanics as me
+from mechanics_entry import Entry
+
+T = me.dynamicsymbols._t
+
+# ----------------------------------------------------------- sympy's docstrings
+
+
+def docstring_system_cart_pendulum(constrained: bool = False):
+    # sympy/physics/mechanics/system.py, the docstring of System (a cart on a rail and a
+    # pendulum, joints without given coordinates; then the bob held at x = 0 by a
+    # holonomic constraint, the slider's speed dependent)
+    g, l = sm.symbols("g l")
+    F = me.dynamicsymbols("F")
+    rail = me.RigidBody("rail")
+    cart = me.RigidBody("cart")
+    bob = me.Particle("bob")
+    bob_frame = me.ReferenceFrame("bob_frame")
+    system = me.System.from_newtonian(rail)
+    system.add_joints(
+        me.PrismaticJoint("slider", rail, cart, joint_axis=rail.x),
+        me.PinJoint(
+            "pin",
+            cart,
+            bob,
+            joint_axis=cart.z,
+            child_interframe=bob_frame,
+            child_point=l * bob_frame.y,
+        ),
+    )
+    system.apply_uniform_gravity(-g * system.y)
+    system.add_loads((cart.masscenter, F * rail.x))
+    system.validate_system()
+    system.form_eoms()
+    if constrained:
+        system.add_holonomic_constraints(bob.masscenter.pos_from(rail.masscenter).dot(system.x))
+        system.q_ind = system.get_joint("pin").coordinates
+        system.q_dep = system.get_joint("slider").coordinates
+        system.u_ind = system.get_joint("pin").speeds
+        system.u_dep = system.get_joint("slider").speeds
+        system.validate_system()
+        system.form_eoms()
+    return system
+
+
+def docstring_system_form_eoms():
+    # sympy/physics/mechanics/system.py, the docstring of System.form_eoms (LagrangesMethod,
+    # a prismatic joint whose speed is the q_dot, a potential_energy, a damper in q_dot)
+    q = me.dynamicsymbols("q")
+    qd = me.dynamicsymbols("q", 1)
+    m, k, b = sm.symbols("m k b")
+    wall = me.RigidBody("W")
+    system = me.System.from_newtonian(wall)
+    bob = me.Particle("P", mass=m)
+    bob.potential_energy = sm.S.Half * k * q**2
+    system.add_joints(me.PrismaticJoint("J", wall, bob, q, qd))
+    system.add_loads((bob.masscenter, b * qd * system.x))
+    system.form_eoms(me.LagrangesMethod)
+    return system
+
+
+def docstring_pin_double_pendulum():
+    # sympy/physics/mechanics/joint.py, the docstring of PinJoint (a double pendulum of
+    # rigid bodies), its equations formed by a System with gravity
+    l1, l2, g = sm.symbols("l1 l2 g")
+    ceiling = me.RigidBody("C")
+    upper_bob = me.RigidBody("U")
+    lower_bob = me.RigidBody("L")
+    ceiling_joint = me.PinJoint(
+        "P1",
+        ceiling,
+        upper_bob,
+        child_point=-l1 * upper_bob.frame.x,
+        joint_axis=ceiling.frame.z,
+    )
+    pendulum_joint = me.PinJoint(
+        "P2",
+        upper_bob,
+        lower_bob,
+        child_point=-l2 * lower_bob.frame.x,
+        joint_axis=upper_bob.frame.z,
+    )
+    system = me.System.from_newtonian(ceiling)
+    system.add_joints(ceiling_joint, pendulum_joint)
+    system.apply_uniform_gravity(-g * ceiling.frame.x)
+    system.form_eoms()
+    return system
+
+
+def docstring_cylindrical_flag():
+    # sympy/physics/mechanics/joint.py, the docstring of CylindricalJoint (a tube sliding
+    # and turning on a pole, a flag sliding and turning on the tube), equations formed
+    # by a System with gravity
+    r, l, w, g = sm.symbols("r l w g")
+    floor = me.RigidBody("floor")
+    tube = me.RigidBody("tube")
+    flag = me.RigidBody("flag")
+    floor_joint = me.CylindricalJoint("C1", floor, tube, joint_axis=floor.z)
+    flag_joint = me.CylindricalJoint(
+        "C2",
+        tube,
+        flag,
+        parent_point=r * tube.y,
+        child_point=-w * flag.y + l * flag.z,
+        joint_axis=tube.y,
+    )
+    system = me.System.from_newtonian(floor)
+    system.add_joints(floor_joint, flag_joint)
+    system.apply_uniform_gravity(-g * floor.z)
+    system.form_eoms()
+    return system
+
+
+def docstring_spherical_pendulum():
+    # sympy/physics/mechanics/joint.py, the docstring of SphericalJoint (a rigid bob on a
+    # ball joint, body-fixed ZXZ angles), equations formed by a System with gravity
+    l1, g = sm.symbols("l1 g")
+    floor = me.RigidBody("F")
+    bob = me.RigidBody("B")
+    joint = me.SphericalJoint(
+        "S", floor, bob, child_point=l1 * bob.y, rot_type="body", rot_order="ZXZ"
+    )
+    system = me.System.from_newtonian(floor)
+    system.add_joints(joint)
+    system.apply_uniform_gravity(-g * floor.y)
+    system.form_eoms()
+    return system
+
+
+def docstring_planar_block():
+    # sympy/physics/mechanics/joint.py, the docstring of PlanarJoint (a block on a
+    # slope), equations formed by a System with gravity
+    a, d, h, g = sm.symbols("a d h g")
+    ground = me.RigidBody("G")
+    block = me.RigidBody("B")
+    slope = me.ReferenceFrame("A")
+    slope.orient_axis(ground.frame, ground.y, a)
+    joint = me.PlanarJoint(
+        "PC",
+        ground,
+        block,
+        parent_point=d * ground.x,
+        child_point=-h * block.x,
+        parent_interframe=slope,
+    )
+    system = me.System.from_newtonian(ground)
+    system.add_joints(joint)
+    system.apply_uniform_gravity(-g * ground.x)
+    system.form_eoms()
+    return system
+
+
+def docstring_coulomb_friction():
+    # sympy/physics/mechanics/actuator.py, the docstring of CoulombKineticFriction (a
+    # block on a spring with Coulomb friction: sign of the velocity)
+    x, v = me.dynamicsymbols("x, v", real=True)
+    m, g, k, mu_k, mu_s, v_s, sigma = sm.symbols("m, g, k, mu_k, mu_s, v_s, sigma")
+    N = me.ReferenceFrame("N")
+    O, P = me.Point("O"), me.Point("P")
+    O.set_vel(N, 0)
+    P.set_pos(O, x * N.x)
+    pathway = me.LinearPathway(O, P)
+    friction = me.CoulombKineticFriction(mu_k, m * g, pathway, v_s=v_s, sigma=sigma, mu_s=mu_k)
+    spring = me.LinearSpring(k, pathway)
+    block = me.Particle("block", point=P, mass=m)
+    kane = me.KanesMethod(N, (x,), (v,), kd_eqs=(x.diff() - v,))
+    friction_loads = friction.to_loads()
+    spring_loads = spring.to_loads()
+    kane.kanes_equations([block], [*friction_loads, *spring_loads])
+    return kane
+
+
+# ---------------------------------------------------------------- PyDy's examples
+
+
+def pydy_mass_spring_damper():
+    # pydy-0.9.4 docs/examples/mass-spring-damper.rst
+    x, v = me.dynamicsymbols("x v")
+    m, c, k, g, t = sm.symbols("m c k g t")
+    ceiling = me.ReferenceFrame("C")
+    O = me.Point("O")
+    P = me.Point("P")
+    O.set_vel(ceiling, 0)
+    P.set_pos(O, x * ceiling.x)
+    P.set_vel(ceiling, v * ceiling.x)
+    damping = -c * P.vel(ceiling)
+    stiffness = -k * P.pos_from(O)
+    gravity = m * g * ceiling.x
+    forces = damping + stiffness + gravity
+    mass = me.Particle("mass", P, m)
+    kane = me.KanesMethod(ceiling, q_ind=[x], u_ind=[v], kd_eqs=[v - x.diff(t)])
+    kane.kanes_equations([mass], loads=[(P, forces)])
+    return kane
+
+
+def pydy_chaos_pendulum():
+    # pydy-0.9.4 docs/examples/chaos-pendulum.rst
+    mA, mB, lB, w, h, g = sm.symbols("m_A, m_B, L_B, w, h, g")
+    theta, phi = me.dynamicsymbols("theta, phi")
+    omega, alpha = me.dynamicsymbols("omega, alpha")
+    kin_diff = (omega - theta.diff(), alpha - phi.diff())
+    N = me.ReferenceFrame("N")
+    A = me.ReferenceFrame("A")
+    B = me.ReferenceFrame("B")
+    A.orient(N, "Axis", (theta, N.y))
+    B.orient(A, "Axis", (phi, A.z))
+    No = me.Point("No")
+    Ao = me.Point("Ao")
+    Bo = me.Point("Bo")
+    lA = (lB - h / 2) / 2
+    Ao.set_pos(No, lA * A.z)
+    Bo.set_pos(No, lB * A.z)
+    A.set_ang_vel(N, omega * N.y)
+    B.set_ang_vel(A, alpha * A.z)
+    No.set_vel(N, 0)
+    Ao.v2pt_theory(No, N, A)
+    Bo.v2pt_theory(No, N, A)
+    IAxx = sm.S(1) / 12 * mA * (2 * lA) ** 2
+    IAyy = IAxx
+    IAzz = 0
+    IA = (me.inertia(A, IAxx, IAyy, IAzz), Ao)
+    IBxx = sm.S(1) / 12 * mB * h**2
+    IByy = sm.S(1) / 12 * mB * (w**2 + h**2)
+    IBzz = sm.S(1) / 12 * mB * w**2
+    IB = (me.inertia(B, IBxx, IByy, IBzz), Bo)
+    rod = me.RigidBody("rod", Ao, A, mA, IA)
+    plate = me.RigidBody("plate", Bo, B, mB, IB)
+    rod_gravity = (Ao, mA * g * N.z)
+    plate_gravity = (Bo, mB * g * N.z)
+    kane = me.KanesMethod(N, q_ind=(theta, phi), u_ind=(omega, alpha), kd_eqs=kin_diff)
+    kane.kanes_equations((rod, plate), (rod_gravity, plate_gravity))
+    return kane
+
+
+def pydy_multidof_holonomic():
+    # pydy-0.9.4 docs/examples/multidof-holonomic.rst (speeds that are not the q_dots,
+    # velocities simplified and set by hand, inputs F(t) and T(t), a damper)
+    q1, q2, q3 = me.dynamicsymbols("q1, q2, q3")
+    u1, u2, u3 = me.dynamicsymbols("u1, u2, u3")
+    F, T = me.dynamicsymbols("F, T")
+    k, c, ma, mb, mc, IB_bo, l, kT, g = sm.symbols("k, c, m_a, m_b, m_c, I_{B_bo}, l, k_T, g")
+    N = me.ReferenceFrame("N")
+    B = N.orientnew("B", "Axis", (q2, N.z))
+    C = B.orientnew("C", "Axis", (q3, N.z))
+    O = me.Point("O")
+    Pab = O.locatenew("P_{ab}", q1 * N.x)
+    Bo = Pab.locatenew("B_o", -2 * l / 3 * B.y)
+    Pbc = Pab.locatenew("P_{bc}", -l * B.y)
+    Pc = Pbc.locatenew("P_c", -l * C.y)
+    Pab.set_vel(N, Pab.pos_from(O).dt(N))
+    Bo.v2pt_theory(Pab, N, B)
+    Pbc.v2pt_theory(Pab, N, B)
+    Pc.v2pt_theory(Pbc, N, C)
+    u1_eq = sm.Eq(u1, Pab.vel(N).dot(N.x))
+    u2_eq = sm.Eq(u2, Bo.vel(N).dot(B.x))
+    u3_eq = sm.Eq(u3, C.ang_vel_in(B).dot(B.z))
+    qdots = sm.solve([u1_eq, u2_eq, u3_eq], q1.diff(), q2.diff(), q3.diff())
+    Pab.set_vel(N, Pab.vel(N).subs(qdots).simplify())
+    Bo.set_vel(N, Bo.vel(N).subs(qdots).express(B).simplify())
+    Pc.set_vel(N, Pc.vel(N).subs(qdots).simplify())
+    B.set_ang_vel(N, B.ang_vel_in(N).subs(qdots).simplify())
+    C.set_ang_vel(B, u3 * N.z)
+    IB = me.inertia(B, 0, 0, IB_bo)
+    Rab = (F - k * q1 - c * qdots[q1.diff()]) * N.x
+    Rbo = -(mb * g) * N.y
+    Rc = -(mc * g) * N.y
+    TB = (T + kT * q3) * N.z
+    TC = -kT * q3 * N.z
+    kdes = [u1_eq.rhs - u1_eq.lhs, u2_eq.rhs - u2_eq.lhs, u3_eq.rhs - u3_eq.lhs]
+    block = me.Particle("block", Pab, ma)
+    pendulum = me.RigidBody("pendulum", Bo, B, mb, (IB, Bo))
+    bob = me.Particle("bob", Pc, mc)
+    bodies = [block, pendulum, bob]
+    loads = [(Pab, Rab), (Bo, Rbo), (Pc, Rc), (B, TB), (C, TC)]
+    kane = me.KanesMethod(N, (q1, q2, q3), (u1, u2, u3), kd_eqs=kdes)
+    kane.kanes_equations(bodies, loads=loads)
+    return kane
+
+
+def pydy_three_link_conical_pendulum():
+    # pydy-0.9.4 docs/examples/three-link-conical-pendulum.rst (angular velocities set
+    # as omega I.z + delta I.x, not the derivatives of the orientations)
+    n = 3
+    alpha = me.dynamicsymbols(f"alpha:{n}")
+    beta = me.dynamicsymbols(f"beta:{n}")
+    omega = me.dynamicsymbols(f"omega:{n}")
+    delta = me.dynamicsymbols(f"delta:{n}")
+    m_bob = sm.symbols(f"m:{n}")
+    l = sm.symbols(f"l:{n}")
+    m_link = sm.symbols(f"M:{n}")
+    Ixx = sm.symbols(f"Ixx:{n}")
+    Iyy = sm.symbols(f"Iyy:{n}")
+    Izz = sm.symbols(f"Izz:{n}")
+    g = sm.symbols("g")
+    I = me.ReferenceFrame("I")
+    A = me.ReferenceFrame("A")
+    A.orient(I, "Space", [alpha[0], beta[0], 0], "ZXY")
+    B = me.ReferenceFrame("B")
+    B.orient(A, "Space", [alpha[1], beta[1], 0], "ZXY")
+    C = me.ReferenceFrame("C")
+    C.orient(B, "Space", [alpha[2], beta[2], 0], "ZXY")
+    kinematic_differentials = []
+    for i in range(n):
+        kinematic_differentials.append(omega[i] - alpha[i].diff())
+        kinematic_differentials.append(delta[i] - beta[i].diff())
+    A.set_ang_vel(I, omega[0] * I.z + delta[0] * I.x)
+    B.set_ang_vel(I, omega[1] * I.z + delta[1] * I.x)
+    C.set_ang_vel(I, omega[2] * I.z + delta[2] * I.x)
+    O = me.Point("O")
+    O.set_vel(I, 0)
+    P1 = O.locatenew("P1", -l[0] * A.y)
+    P2 = P1.locatenew("P2", -l[1] * B.y)
+    P3 = P2.locatenew("P3", -l[2] * C.y)
+    P1.v2pt_theory(O, I, A)
+    P2.v2pt_theory(P1, I, B)
+    P3.v2pt_theory(P2, I, C)
+    particles = [
+        me.Particle("Pa1", P1, m_bob[0]),
+        me.Particle("Pa2", P2, m_bob[1]),
+        me.Particle("Pa3", P3, m_bob[2]),
+    ]
+    P_link1 = O.locatenew("P_link1", -l[0] / 2 * A.y)
+    P_link2 = P1.locatenew("P_link2", -l[1] / 2 * B.y)
+    P_link3 = P2.locatenew("P_link3", -l[2] / 2 * C.y)
+    P_link1.v2pt_theory(O, I, A)
+    P_link2.v2pt_theory(P1, I, B)
+    P_link3.v2pt_theory(P2, I, C)
+    links = [
+        me.RigidBody(
+            "link1", P_link1, A, m_link[0], (me.inertia(A, Ixx[0], Iyy[0], Izz[0]), P_link1)
+        ),
+        me.RigidBody(
+            "link2", P_link2, B, m_link[1], (me.inertia(B, Ixx[1], Iyy[1], Izz[1]), P_link2)
+        ),
+        me.RigidBody(
+            "link3", P_link3, C, m_link[2], (me.inertia(C, Ixx[2], Iyy[2], Izz[2]), P_link3)
+        ),
+    ]
+    forces = [(p.point, -p.mass * g * I.y) for p in particles]
+    forces += [(link.masscenter, -link.mass * g * I.y) for link in links]
+    kane = me.KanesMethod(
+        I, q_ind=alpha + beta, u_ind=omega + delta, kd_eqs=kinematic_differentials
+    )
+    kane.kanes_equations(links + particles, loads=forces)
+    return kane
+
+
+def pydy_astrobee():
+    # pydy-0.9.4 docs/examples/astrobee.rst (a free rigid body, Euler angles, force and
+    # torque inputs)
+    ISS = me.ReferenceFrame("N")
+    B = me.ReferenceFrame("B")
+    q1, q2, q3 = me.dynamicsymbols("q1:4")
+    B.orient(ISS, "Body", (q1, q2, q3), "xyz")
+    O = me.Point("O")
+    O.set_vel(ISS, 0)
+    x, y, z = me.dynamicsymbols("x, y, z")
+    C = O.locatenew("C", x * ISS.x + y * ISS.y + z * ISS.z)
+    ux = me.dynamicsymbols("u_x")
+    uy = me.dynamicsymbols("u_y")
+    uz = me.dynamicsymbols("u_z")
+    u1 = me.dynamicsymbols("u_1")
+    u2 = me.dynamicsymbols("u_2")
+    u3 = me.dynamicsymbols("u_3")
+    z1 = sm.Eq(ux, x.diff())
+    z2 = sm.Eq(uy, y.diff())
+    z3 = sm.Eq(uz, z.diff())
+    z4 = sm.Eq(u1, q1.diff())
+    z5 = sm.Eq(u2, q2.diff())
+    z6 = sm.Eq(u3, q3.diff())
+    u = sm.solve(
+        [z1, z2, z3, z4, z5, z6], x.diff(), y.diff(), z.diff(), q1.diff(), q2.diff(), q3.diff()
+    )
+    C.set_vel(ISS, C.pos_from(O).dt(ISS).subs(u))
+    B.set_ang_vel(ISS, B.ang_vel_in(ISS).subs(u))
+    m = sm.symbols("m")
+    Ix, Iy, Iz = sm.symbols("I_x, I_y, I_z")
+    I = me.inertia(B, Ix, Iy, Iz)
+    Fx_mag, Fy_mag, Fz_mag = me.dynamicsymbols("Fmag_x, Fmag_y, Fmag_z")
+    T1_mag, T2_mag, T3_mag = me.dynamicsymbols("Tmag_1, Tmag_2, Tmag_3")
+    kdes = [
+        z1.rhs - z1.lhs,
+        z2.rhs - z2.lhs,
+        z3.rhs - z3.lhs,
+        z4.rhs - z4.lhs,
+        z5.rhs - z5.lhs,
+        z6.rhs - z6.lhs,
+    ]
+    body = me.RigidBody("body", C, B, m, (I, C))
+    loads = [
+        (C, Fx_mag * ISS.x),
+        (C, Fy_mag * ISS.y),
+        (C, Fz_mag * ISS.z),
+        (B, T1_mag * B.x),
+        (B, T2_mag * B.y),
+        (B, T3_mag * B.z),
+    ]
+    kane = me.KanesMethod(ISS, (x, y, z, q1, q2, q3), (ux, uy, uz, u1, u2, u3), kd_eqs=kdes)
+    kane.kanes_equations([body], loads=loads)
+    return kane
+
+
+def pydy_n_body_pendulum(n: int = 2):
+    # pydy-0.9.4 docs/examples/3d-n-body-pendulum.rst (n = 2, the smallest it allows; the
+    # balls' contact force switched by Heaviside: not smooth)
+    m, m1, g, r, l, reibung, k, t = sm.symbols("m, m1, g, r, l, reibung, k, t")
+    iXX, iYY, iZZ = sm.symbols("iXX, iYY, iZZ")
+    q, u, A, Dmc, P, punkt = [], [], [], [], [], []
+    for i in range(n):
+        for j in ("x", "y", "z"):
+            q.append(me.dynamicsymbols("q" + j + str(i)))
+            u.append(me.dynamicsymbols("u" + j + str(i)))
+        A.append(me.ReferenceFrame("A" + str(i)))
+        Dmc.append(me.Point("Dmc" + str(i)))
+        P.append(me.Point("P" + str(i)))
+        punkt.append(me.Point("punkt" + str(i)))
+    N = me.ReferenceFrame("N")
+    P0 = me.Point("P0")
+    rot, rot1 = [], []
+    A[0].orient_body_fixed(N, (q[0], q[1], q[2]), "123")
+    rot.append(A[0].ang_vel_in(N))
+    A[0].set_ang_vel(N, u[0] * A[0].x + u[1] * A[0].y + u[2] * A[0].z)
+    rot1.append(A[0].ang_vel_in(N))
+    for i in range(1, n):
+        A[i].orient_body_fixed(A[i - 1], (q[3 * i], q[3 * i + 1], q[3 * i + 2]), "123")
+        rot.append(A[i].ang_vel_in(N))
+        A[i].set_ang_vel(N, u[3 * i] * A[i].x + u[3 * i + 1] * A[i].y + u[3 * i + 2] * A[i].z)
+        rot1.append(A[i].ang_vel_in(N))
+    P[0].set_pos(P0, 0.0)
+    P[0].set_vel(N, 0.0)
+    Dmc[0].set_pos(P[0], l / 2.0 * A[0].y)
+    Dmc[0].v2pt_theory(P[0], N, A[0])
+    punkt[0].set_pos(Dmc[0], r * A[0].z)
+    punkt[0].v2pt_theory(Dmc[0], N, A[0])
+    for i in range(1, n):
+        P[i].set_pos(P[i - 1], l * A[i - 1].y)
+        P[i].v2pt_theory(P[i - 1], N, A[i - 1])
+        Dmc[i].set_pos(P[i], l / sm.S(2.0) * A[i].y)
+        Dmc[i].v2pt_theory(P[i], N, A[i])
+        punkt[i].set_pos(Dmc[i], r * A[i].z)
+        punkt[i].v2pt_theory(Dmc[i], N, A[i])
+    BODY = []
+    for i in range(n):
+        inertia = me.inertia(A[i], iXX, iYY, iZZ)
+        BODY.append(me.RigidBody("body" + str(i), Dmc[i], A[i], m, (inertia, Dmc[i])))
+        BODY.append(me.Particle("punct" + str(i), punkt[i], m1))
+    FG = [(Dmc[i], -m * g * N.y) for i in range(n)] + [(punkt[i], -m1 * g * N.y) for i in range(n)]
+    FB = []
+    for i in range(n):
+        for j in range(i + 1, n):
+            aa = Dmc[j].pos_from(Dmc[i])
+            bb = aa.magnitude()
+            aa = aa.normalize()
+            FB.append((Dmc[j], k * (2 * r - bb) * aa * sm.Heaviside(2.0 * r - bb)))
+            FB.append((Dmc[i], -k * (2 * r - bb) * aa * sm.Heaviside(2.0 * r - bb)))
+    kd = []
+    for i in range(n):
+        for uv in A[i]:
+            kd.append(me.dot(rot[i] - rot1[i], uv))
+    KM = me.KanesMethod(N, q_ind=q, u_ind=u, kd_eqs=kd)
+    KM.kanes_equations(BODY, FG + FB)
+    return KM
+
+
+# ------------------------------------------------------------ the cases of issue 25
+
+
+def issue_pendulum_with_actuators():
+    # issue 25: a pendulum through System with a TorqueActuator (k q at the pin) and a
+    # LinearSpring on a LinearPathway: actuators, which System.loads leaves out
+    q, u = me.dynamicsymbols("q u")
+    k, c, m, l, g = sm.symbols("k c m l g")
+    ground = me.RigidBody("ground")
+    bob = me.RigidBody("bob", mass=m)
+    system = me.System.from_newtonian(ground)
+    pin = me.PinJoint("pin", ground, bob, q, u, joint_axis=ground.z, child_point=l * bob.frame.y)
+    system.add_joints(pin)
+    anchor = ground.masscenter.locatenew("anchor", l * ground.x)
+    spring = me.LinearSpring(c, me.LinearPathway(anchor, bob.masscenter))
+    system.add_actuators(me.TorqueActuator(-k * q, ground.z, bob, ground), spring)
+    system.apply_uniform_gravity(-g * ground.y)
+    system.form_eoms()
+    return system
+
+
+def issue_system_lagrange_potential_energy():
+    # issue 25: the double pendulum of test_dub_pen through System with
+    # eom_method=LagrangesMethod, joints whose speeds are the q_dots, potential_energy
+    q1, q2 = me.dynamicsymbols("q1 q2")
+    q1d, q2d = me.dynamicsymbols("q1 q2", 1)
+    m, l, g = sm.symbols("m l g")
+    ceiling = me.RigidBody("ceiling")
+    upper = me.Particle("upper", mass=m)
+    lower = me.Particle("lower", mass=m)
+    system = me.System.from_newtonian(ceiling)
+    f1, f2 = me.ReferenceFrame("f1"), me.ReferenceFrame("f2")
+    system.add_joints(
+        me.PinJoint(
+            "P1",
+            ceiling,
+            upper,
+            q1,
+            q1d,
+            joint_axis=ceiling.z,
+            child_interframe=f1,
+            child_point=-l * f1.x,
+        ),
+        me.PinJoint(
+            "P2",
+            upper,
+            lower,
+            q2,
+            q2d,
+            joint_axis=f1.z,
+            parent_interframe=f1,
+            child_interframe=f2,
+            child_point=-l * f2.x,
+        ),
+    )
+    for body in (upper, lower):
+        body.potential_energy = (
+            -body.mass * g * body.masscenter.pos_from(system.fixed_point).dot(system.x)
+        )
+    system.form_eoms(eom_method=me.LagrangesMethod)
+    return system
+
+
+def issue_hinge_positive_symbols():
+    # issue 25: a cart with a pendulum whose inertia is given about the hinge, every
+    # symbol positive: the metric [[mA + mC, a mA cos q2], [., Iz]] is positive definite
+    # only for physical values (Iz >= mA a^2)
+    x, th, u1, u2 = me.dynamicsymbols("x theta u1 u2")
+    mA, mC, a, Iz, g = sm.symbols("m_A m_C a I_z g", positive=True)
+    N = me.ReferenceFrame("N")
+    A = N.orientnew("A", "Axis", [th, N.z])
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    H = O.locatenew("H", x * N.x)
+    H.set_vel(N, u1 * N.x)
+    A.set_ang_vel(N, u2 * N.z)
+    Ao = H.locatenew("Ao", -a * A.y)
+    Ao.v2pt_theory(H, N, A)
+    pendulum = me.RigidBody("pendulum", Ao, A, mA, (me.inertia(A, 0, 0, Iz), H))
+    km = me.KanesMethod(N, [x, th], [u1, u2], kd_eqs=[x.diff(T) - u1, th.diff(T) - u2])
+    km.kanes_equations([me.Particle("cart", H, mC), pendulum], [(Ao, -mA * g * N.y)])
+    return km
+
+
+def issue_lagrange_loads_without_frame():
+    # issue 25: LagrangesMethod with loads (forcelist) but no frame=
+    q = me.dynamicsymbols("q")
+    m, c = sm.symbols("m c")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", q * N.x)
+    P.set_vel(N, q.diff(T) * N.x)
+    L = me.Lagrangian(N, me.Particle("p", P, m))
+    # (sympy's form_lagranges_equations fails without the frame: the import is what
+    # the user tries)
+    return me.LagrangesMethod(L, [q], forcelist=[(P, -c * q.diff(T) * N.x)])
+
+
+MORE: list[Entry] = [
+    Entry(
+        "System docstring cart pendulum",
+        "sympy/physics/mechanics/system.py: System",
+        docstring_system_cart_pendulum,
+    ),
+    Entry(
+        "System docstring cart pendulum, held at x = 0",
+        "sympy/physics/mechanics/system.py: System (holonomic constraint)",
+        lambda: docstring_system_cart_pendulum(constrained=True),
+    ),
+    Entry(
+        "System.form_eoms docstring (Lagrange)",
+        "sympy/physics/mechanics/system.py: System.form_eoms",
+        docstring_system_form_eoms,
+    ),
+    Entry(
+        "PinJoint docstring double pendulum",
+        "sympy/physics/mechanics/joint.py: PinJoint",
+        docstring_pin_double_pendulum,
+        c=True,
+    ),
+    Entry(
+        "CylindricalJoint docstring flag",
+        "sympy/physics/mechanics/joint.py: CylindricalJoint",
+        docstring_cylindrical_flag,
+    ),
+    Entry(
+        "SphericalJoint docstring pendulum",
+        "sympy/physics/mechanics/joint.py: SphericalJoint",
+        docstring_spherical_pendulum,
+    ),
+    Entry(
+        "PlanarJoint docstring block on slope",
+        "sympy/physics/mechanics/joint.py: PlanarJoint",
+        docstring_planar_block,
+    ),
+    Entry(
+        "CoulombKineticFriction docstring",
+        "sympy/physics/mechanics/actuator.py: CoulombKineticFriction",
+        docstring_coulomb_friction,
+        refused=r"the load on O contains the non-smooth functions \[.*'sign'\]; .* tanh",
+    ),
+    Entry(
+        "PyDy mass-spring-damper",
+        "pydy-0.9.4 docs/examples/mass-spring-damper.rst",
+        pydy_mass_spring_damper,
+    ),
+    Entry(
+        "PyDy chaos pendulum", "pydy-0.9.4 docs/examples/chaos-pendulum.rst", pydy_chaos_pendulum
+    ),
+    Entry(
+        "PyDy multidof holonomic",
+        "pydy-0.9.4 docs/examples/multidof-holonomic.rst",
+        pydy_multidof_holonomic,
+        c=True,
+    ),
+    Entry(
+        "PyDy three-link conical pendulum",
+        "pydy-0.9.4 docs/examples/three-link-conical-pendulum.rst",
+        pydy_three_link_conical_pendulum,
+        slow=True,
+    ),
+    Entry("PyDy astrobee", "pydy-0.9.4 docs/examples/astrobee.rst", pydy_astrobee),
+    Entry(
+        "PyDy 3d n-body pendulum (n = 2)",
+        "pydy-0.9.4 docs/examples/3d-n-body-pendulum.rst",
+        pydy_n_body_pendulum,
+        slow=True,
+        refused=r"the load on Dmc1 contains the non-smooth functions \['Heaviside'\]",
+    ),
+    Entry(
+        "issue 25: System actuators",
+        "issue 25 (TorqueActuator, LinearSpring)",
+        issue_pendulum_with_actuators,
+    ),
+    Entry(
+        "issue 25: System for LagrangesMethod, potential_energy",
+        "issue 25 (test_dub_pen through System)",
+        issue_system_lagrange_potential_energy,
+    ),
+    Entry(
+        "issue 25: hinge inertia, positive symbols",
+        "issue 25 (test_parallel_axis, positive)",
+        issue_hinge_positive_symbols,
+    ),
+    Entry(
+        "issue 25: LagrangesMethod loads without frame=",
+        "issue 25",
+        issue_lagrange_loads_without_frame,
+        refused=r"LagrangesMethod has loads \(forcelist\) but no frame=; .* pass frame=N",
+    ),
+]
