@@ -108,3 +108,38 @@ def test_a_failure_of_sympy_while_reading_becomes_a_scene_error_naming_the_part(
     with pytest.raises(sm.SceneError, match=r"^from_mechanics: KanesMethod: reading its loads"):
         with reading("KanesMethod", "its loads"):
             raise error
+
+
+def test_kinematic_equations_with_a_prescribed_part_are_refused_naming_kd_eqs():
+    km = _particle_on_a_line(lambda q, N: q * N.x, lambda q, u, N: u * N.x, lambda q, u: u + 1)
+    with pytest.raises(
+        sm.SceneError,
+        match=r"KanesMethod\.kd_eqs: the kinematic differential equations must read"
+        r" q_dot = S\(q\) u; \[1\] is left over",
+    ):
+        sm.Scene.from_mechanics(km)
+
+
+def test_a_velocity_constraint_with_a_prescribed_rate_is_refused_naming_it():
+    q1, q2, u1, u2 = me.dynamicsymbols("q1 q2 u1 u2")
+    m = sp.Symbol("m", positive=True)
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", q1 * N.x + q2 * N.y)
+    P.set_vel(N, u1 * N.x + u2 * N.y)
+    km = me.KanesMethod(
+        N,
+        [q1, q2],
+        [u1],
+        kd_eqs=[q1.diff(T) - u1, q2.diff(T) - u2],
+        u_dependent=[u2],
+        velocity_constraints=[u2 - 1],
+    )
+    km.kanes_equations([me.Particle("bob", P, m)], [])
+    with pytest.raises(
+        sm.SceneError,
+        match=r"KanesMethod\.velocity_constraints / configuration_constraints: velocity"
+        r" constraints with a part free of the speeds \[-1\]",
+    ):
+        sm.Scene.from_mechanics(km)

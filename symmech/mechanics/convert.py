@@ -322,8 +322,9 @@ def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
     bad = [e for e in model.velocity_offsets if e != 0]
     if bad:
         raise SceneError(
-            f"from_mechanics: velocity constraints with a part free of the speeds {bad}; symmech"
-            " takes homogeneous constraints mu(q) v = 0"
+            f"from_mechanics: {model.names['constraints']}: velocity constraints with a part"
+            f" free of the speeds {bad}; symmech takes homogeneous constraints mu(q) v = 0"
+            " (a constraint with a prescribed rate is prescribed motion)"
         )
     rows = [list(r) for r in model.velocity_rows]
     for h in model.holonomic:

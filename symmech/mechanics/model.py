@@ -210,8 +210,10 @@ class Model:
         offset = (rhs - S * sp.Matrix(u)).applyfunc(sp.expand)
         if any(e != 0 for e in offset):
             raise SceneError(
-                f"from_mechanics: the kinematic differential equations must read q_dot = S(q) u;"
-                f" {list(offset)} is left over (a part free of the speeds)"
+                f"from_mechanics: {self.names['kinematics']}: the kinematic differential"
+                f" equations must read q_dot = S(q) u; {list(offset)} is left over (a part"
+                " free of the speeds: prescribed motion, which symmech's scleronomic systems"
+                " do not have); make the speeds' definitions homogeneous in the speeds"
             )
         if any(a.has(*u) or a.has(*qd) for a in S):
             raise SceneError(
@@ -235,9 +237,10 @@ class Model:
             )
         if S.rows + len(extra) != len(u):
             raise SceneError(
-                f"from_mechanics: {len(self.q)} coordinates and {len(u)} speeds; the speeds"
-                f" {[u[r] for r in extra]} reach no coordinate, which leaves the frame S"
-                " non-square"
+                f"from_mechanics: {self.names['kinematics']}: {len(self.q)} coordinates and"
+                f" {len(u)} speeds; the speeds {[u[r] for r in extra]} reach no coordinate,"
+                " which leaves the frame S non-square (give each speed a coordinate whose"
+                " rate it sets, or leave it out)"
             )
         taken = {str(c.func) for c in (*self.q, *u)}
         for r in extra:
