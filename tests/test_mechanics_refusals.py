@@ -143,3 +143,8 @@ def test_a_velocity_constraint_with_a_prescribed_rate_is_refused_naming_it():
         r" constraints with a part free of the speeds \[-1\]",
     ):
         sm.Scene.from_mechanics(km)
+
+
+def test_a_system_without_coordinates_is_refused_as_such():
+    with pytest.raises(sm.SceneError, match=r"^from_mechanics: the System has no generalized"):
+        sm.Scene.from_mechanics(me.System())

@@ -82,6 +82,12 @@ class Model:
             self._lagrange(model, "LagrangesMethod")
         else:
             self._system(model)
+        if not self.q:
+            raise SceneError(
+                f"from_mechanics: the {type(model).__name__} has no generalized coordinates"
+                " (q): symmech needs one coordinate per degree of freedom (a System's"
+                " joints add theirs, or add_coordinates)"
+            )
         if self.S is None:
             self._check_basis_names()
 
