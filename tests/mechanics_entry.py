@@ -22,7 +22,8 @@ class Entry:
     """A model of the table: its name, where it was copied from, its builder (returns the
     model with its equations formed), and the reason it is refused (a regular expression
     the SceneError's message must match; None: it must import and agree).  ``slow``:
-    left out of CI and of ``--quick``; ``c``: the generated C is checked too."""
+    left out of CI and of ``--quick``; ``c``: the generated C is checked too;
+    ``values``: parameters given a value of their own (the rest random in [0.5, 1.5])."""
 
     name: str
     source: str
@@ -30,6 +31,8 @@ class Entry:
     refused: str | None = None
     slow: bool = False
     c: bool = False
+    #: parameter values (by name) fixed for the comparison, the others random
+    values: tuple[tuple[str, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -62,6 +65,8 @@ def judge(entry: Entry, c: bool = False) -> Outcome:
             kind, what = "raised", f"{type(exc).__name__}: {exc}"
         else:
             values = random_values(model)
+            fixed = dict(entry.values)
+            values = {k: fixed.get(str(k), v) for k, v in values.items()}
             kind = "imported"
             worst = worst_difference(model, scene, values)
             if c:
