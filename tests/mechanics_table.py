@@ -19,6 +19,7 @@ from __future__ import annotations
 import sympy as sp
 from mechanics_entry import Entry
 from mechanics_table_more import MORE
+from mechanics_table_pydy import PYDY
 from sympy import Matrix, cos, pi, sin, symbols
 from sympy.physics import mechanics as me
 from sympy.physics.mechanics import (
@@ -859,4 +860,4 @@ SYMPY: list[Entry] = [
 ]
 
 #: every model of the table
-TABLE: list[Entry] = [*SYMPY, *models_entries(), *MORE]
+TABLE: list[Entry] = [*SYMPY, *models_entries(), *MORE, *PYDY]
