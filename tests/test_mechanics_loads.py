@@ -171,11 +171,14 @@ def _cart_with_hinged_pendulum():
     return km, {mA: 1.0, mC: 2.0, a: 0.5, Iz: 0.4, g: 9.81}
 
 
-@pytest.mark.parametrize("target", ["numpy", "c"])
-def test_metric_positive_for_physical_values_only_is_checked_at_run_time(target):
+@pytest.mark.parametrize(
+    ("target", "strategy"), [("numpy", "auto"), ("c", "closed_form"), ("c", "linear_solve")]
+)
+def test_metric_positive_for_physical_values_only_is_checked_at_run_time(target, strategy):
     """Accepted (every symbol positive=True, the sampler keeps them positive), and the
     generated code's Cholesky factorisation of g (SYMMECH_NOT_SPD in C) is the check:
-    at physical values its rhs is the model's own, at I_z < m_A a^2 a NumericalError."""
+    at physical values its rhs is the model's own, at I_z < m_A a^2 a NumericalError,
+    whether g is inverted in closed form or factorised at run time."""
     if target == "c":
         require_c_compiler()
     km, values = _cart_with_hinged_pendulum()
@@ -183,7 +186,7 @@ def test_metric_positive_for_physical_values_only_is_checked_at_run_time(target)
     assert scene.declaration.metric_checked_at_run_time
     assert "checked at run time" in repr(scene)
     assert worst_difference(km, scene, values) < 1e-10
-    mod = sm.codegen.generate(scene, target=target).load()
+    mod = sm.codegen.generate(scene, target=target, strategy=strategy).load()
     params = {str(k): v for k, v in values.items()}
     qs, us = [0.1, 0.2], [0.3, -0.4]
     theirs = model_accelerations(km, values, qs, us, model_basis(km))
