@@ -714,6 +714,75 @@ def jointsmethod_chaos_pendulum():
     return system
 
 
+def four_bar_linkage_manual_constraints():
+    # sympy/physics/mechanics/tests/test_jointsmethod.py::
+    # test_four_bar_linkage_with_manual_constraints, with RigidBody and the joints'
+    # kinematic equations where sympy's test uses the deprecated Body and JointsMethod
+    q1, q2, q3, u1, u2, u3 = dynamicsymbols("q1:4, u1:4")
+    l1, l2, l3, l4, rho = symbols("l1:5, rho")
+    N = ReferenceFrame("N")
+    inertias = [inertia(N, 0, 0, rho * l**3 / 12) for l in (l1, l2, l3, l4)]
+    link1 = RigidBody("Link1", frame=N, mass=rho * l1)
+    link2 = RigidBody("Link2", mass=rho * l2)
+    link3 = RigidBody("Link3", mass=rho * l3)
+    link4 = RigidBody("Link4", mass=rho * l4)
+    link1.central_inertia = inertias[0]
+    link2.central_inertia = inertia(link2.frame, 0, 0, rho * l2**3 / 12)
+    link3.central_inertia = inertia(link3.frame, 0, 0, rho * l3**3 / 12)
+    link4.central_inertia = inertia(link4.frame, 0, 0, rho * l4**3 / 12)
+    joint1 = me.PinJoint(
+        "J1",
+        link1,
+        link2,
+        coordinates=q1,
+        speeds=u1,
+        joint_axis=link1.z,
+        parent_point=l1 / 2 * link1.x,
+        child_point=-l2 / 2 * link2.x,
+    )
+    joint2 = me.PinJoint(
+        "J2",
+        link2,
+        link3,
+        coordinates=q2,
+        speeds=u2,
+        joint_axis=link2.z,
+        parent_point=l2 / 2 * link2.x,
+        child_point=-l3 / 2 * link3.x,
+    )
+    joint3 = me.PinJoint(
+        "J3",
+        link3,
+        link4,
+        coordinates=q3,
+        speeds=u3,
+        joint_axis=link3.z,
+        parent_point=l3 / 2 * link3.x,
+        child_point=-l4 / 2 * link4.x,
+    )
+    loop = link4.masscenter.pos_from(link1.masscenter) + l1 / 2 * link1.x + l4 / 2 * link4.x
+    fh = Matrix([loop.dot(link1.x), loop.dot(link1.y)])
+    kdes = [*joint1.kdes, *joint2.kdes, *joint3.kdes]
+    t = dynamicsymbols._t
+    qdots = sp.solve(kdes, [q1.diff(t), q2.diff(t), q3.diff(t)])
+    fhd = fh.diff(t).subs(qdots)
+    link1.masscenter.set_vel(N, 0)  # (JointsMethod fixes its root body so)
+    kane = KanesMethod(
+        N,
+        q_ind=[q1],
+        u_ind=[u1],
+        q_dependent=[q2, q3],
+        u_dependent=[u2, u3],
+        kd_eqs=kdes,
+        configuration_constraints=fh,
+        velocity_constraints=fhd,
+        forcelist=[],
+        bodies=[link1, link2, link3, link4],
+    )
+    kane.kanes_equations()
+    return kane
+
+
 def models_entries() -> list[Entry]:
     """``sympy.physics.mechanics.models``, called as a user calls it."""
     from sympy.physics.mechanics import models
@@ -851,6 +920,11 @@ SYMPY: list[Entry] = [
         system_box_on_ground,
         refused=r"System\.u_aux \[ua\(t\)\]: auxiliary speeds are not supported; build the"
         r" System without them",
+    ),
+    Entry(
+        "four-bar linkage, manual constraints",
+        _TESTS + "test_jointsmethod.py::test_four_bar_linkage_with_manual_constraints",
+        four_bar_linkage_manual_constraints,
     ),
     Entry(
         "System chaos pendulum",

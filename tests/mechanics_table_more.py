@@ -280,6 +280,25 @@ def issue_lagrange_loads_without_frame():
     return me.LagrangesMethod(L, [q], forcelist=[(P, -c * q.diff(T) * N.x)])
 
 
+def issue_kane_potential_energy():
+    # issue 25: a KanesMethod whose bodies carry potential_energy (test_pend's pendulum
+    # with one): KanesMethod does not read it, nor does the import (it warns)
+    q, u = me.dynamicsymbols("q u")
+    m, l, g = sm.symbols("m l g")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    A = N.orientnew("A", "Axis", [q, N.z])
+    A.set_ang_vel(N, u * N.z)
+    P = O.locatenew("P", l * A.x)
+    P.v2pt_theory(O, N, A)
+    bob = me.Particle("bob", P, m)
+    bob.potential_energy = -m * g * l * sm.cos(q)
+    km = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(T) - u])
+    km.kanes_equations([bob], [(P, m * g * N.x)])
+    return km
+
+
 MORE: list[Entry] = [
     Entry(
         "System docstring cart pendulum",
@@ -343,5 +362,10 @@ MORE: list[Entry] = [
         "issue 25",
         issue_lagrange_loads_without_frame,
         refused=r"LagrangesMethod has loads \(forcelist\) but no frame=; .* pass frame=N",
+    ),
+    Entry(
+        "issue 25: KanesMethod with potential_energy",
+        "issue 25 (test_pend with a potential_energy)",
+        issue_kane_potential_energy,
     ),
 ]
