@@ -39,7 +39,7 @@ from symmech.impacts import (
     derive_impact_map,
     derive_several_impact_map,
 )
-from symmech.mechanics import scene_arguments
+from symmech.mechanics import reading, scene_arguments
 
 __all__ = ["Scene"]
 
@@ -185,7 +185,9 @@ class Scene:
         (auxiliary speeds, non-smooth loads, a singular mass matrix, ...) raises a
         :class:`~symmech.SceneError` naming the model's part.
         """
-        return cls(**scene_arguments(model, walls=list(walls), name=name))
+        arguments = scene_arguments(model, walls=list(walls), name=name)
+        with reading(type(model).__name__, "the scene its parts declare"):
+            return cls(**arguments)
 
     def replace(self, **changes: Any) -> Scene:
         """A new Scene declaring the same system with ``changes`` to the arguments of

@@ -117,3 +117,30 @@ def round_trip(model, name: str = "model") -> tuple[str, object]:
     except sm.SceneError as exc:
         return "refused", str(exc)
     return "imported", worst_difference(model, scene, values)
+
+
+def c_worst_difference(model, scene: sm.Scene, values: dict, *, seed: int = 3, states: int = 3):
+    """The largest difference between the accelerations of the scene's generated C
+    (``rhs``) and the model's own at ``states`` random states (time-dependent inputs of
+    the model given random values)."""
+    mod = sm.codegen.generate(scene, target="c", functions=["rhs"]).load()
+    basis = model_basis(model)
+    inputs = sorted(
+        {a for e in model.forcing_full for a in e.atoms(sp.core.function.AppliedUndef)}
+        - set(model.q)
+        - set(basis),
+        key=str,
+    )
+    rng = np.random.default_rng(seed)
+    byname = {str(k): v for k, v in values.items()}
+    params = {p: byname.get(p, 0.7) for p in mod.parameters}
+    given = {str(a.func): float(rng.uniform(-1, 1)) for a in inputs}
+    model_values = {**values, **{a: given[str(a.func)] for a in inputs}}
+    worst = 0.0
+    for _ in range(states):
+        qs = rng.uniform(-0.8, 0.8, scene.n)
+        vs = consistent_speeds(scene, values, qs, rng)
+        ours = mod.rhs(np.concatenate([qs, vs]), params, inputs=given or None)[scene.n :]
+        theirs = model_accelerations(model, model_values, qs[: len(model.q)], vs, basis)
+        worst = max(worst, float(np.max(np.abs(ours - theirs) / (1 + np.abs(theirs)))))
+    return worst

@@ -24,6 +24,7 @@ SCRIPTS: dict[str, tuple[tuple[str, ...], str]] = {
     "hostile_checks.py": ((), "ratio"),
     "impacts.py": ((), "3-link cart, tip wall"),
     "mechanics.py": ((), "symmech all functions: the same"),
+    "mechanics_roundtrip.py": ((), "total run time:"),
     "steppers.py": ((), "(rodas4 / BDF time:"),
     "stress.py": ((), " 0 failed"),
     "sweep.py": ((), "Dask worker RSS"),

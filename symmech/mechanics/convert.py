@@ -48,8 +48,7 @@ derivative) are dropped.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -59,11 +58,11 @@ from symmech.algebra.numeric import EvaluationError, evaluate_matrix
 from symmech.algebra.rank import rank_at
 from symmech.algebra.walk import atoms
 from symmech.algebra.zero import is_zero
-from symmech.declaration.admissible import NON_SMOOTH
 from symmech.declaration.checks import Points
 from symmech.declaration.dynamic import DynamicTranslation
 from symmech.errors import SceneError
 from symmech.mechanics.model import Model, mechanics
+from symmech.mechanics.refusals import non_smooth_in, reading, refuse_non_smooth
 
 __all__ = ["scene_arguments"]
 
@@ -90,11 +89,19 @@ def _partials_of(vec: Any, model: Model, what: str) -> list[Any]:
     parts = [vec.diff(w, frame, var_in_dcm=False) for w in model.basis]
     rest = vec.xreplace({w: 0 for w in model.basis})
     if rest != 0 and rest.to_matrix(frame).applyfunc(sp.expand) != sp.zeros(3, 1):
+        # (a position through Abs: its derivative's re, im and sign are not velocities)
+        refuse_non_smooth(vec.to_matrix(frame), what, _KINEMATICS_HINT)
         raise SceneError(
             f"from_mechanics: {what} has a part free of the velocities ({rest}); symmech"
             " needs scleronomic kinematics (no prescribed motion)"
         )
     return parts
+
+
+_KINEMATICS_HINT = (
+    "write the positions and velocities without them (sqrt(q**2) is |q|: keep the"
+    " quantity it stood for, or a branch of it valid where the model moves)"
+)
 
 
 def _dot(a: Any, b: Any, expand: bool = True) -> sp.Expr:
@@ -145,7 +152,22 @@ def _metric(model: Model) -> sp.Matrix:
             M[r, s] = normal_form(M[r, s])  # the Pythagorean reduction, within its budget
         for s in range(r):
             M[r, s] = M[s, r]
+    if non_smooth_in(M):
+        _refuse_non_smooth_bodies(model, M)
     return M
+
+
+def _refuse_non_smooth_bodies(model: Model, M: sp.Matrix) -> None:
+    """Refuse the metric ``M`` that holds a non-smooth function, naming the first body
+    whose velocities hold one (else the metric itself: a body's mass or inertia)."""
+    me = mechanics()
+    for body in model.bodies:
+        vectors = [("mass centre velocity", body.masscenter.vel(model.frame))]
+        if isinstance(body, me.RigidBody):
+            vectors.append(("angular velocity", body.frame.ang_vel_in(model.frame)))
+        for what, vec in vectors:
+            refuse_non_smooth(vec.to_matrix(model.frame), f"{body}: {what}", _KINEMATICS_HINT)
+    refuse_non_smooth(M, "the kinetic metric of the bodies (their masses and inertias)")
 
 
 def _from_lagrangian(model: Model) -> tuple[sp.Matrix, sp.Expr]:
@@ -154,6 +176,7 @@ def _from_lagrangian(model: Model) -> tuple[sp.Matrix, sp.Expr]:
     refused."""
     from symmech.algebra.simplification import normal_form
 
+    refuse_non_smooth([model.lagrangian], model.names["lagrangian"], _KINEMATICS_HINT)
     L = sp.expand(model.lagrangian)
     qd = model.basis
     _refuse_non_quadratic(L, qd)
@@ -244,7 +267,7 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
     for load in model.loads:
         # q_dot in a load is replaced by S u, as KanesMethod does (its _form_fr)
         where, vector = load[0], _in_basis(load[1], model)
-        _refuse_non_smooth(vector.to_matrix(model.frame), f"the load on {where}")
+        refuse_non_smooth(vector.to_matrix(model.frame), f"the load on {where}")
         if isinstance(where, me.ReferenceFrame):
             w = _partials(where.ang_vel_in(model.frame), model, f"torque on {where}")
             F = [a + _dot(vector, b) for a, b in zip(F, w, strict=True)]
@@ -294,28 +317,14 @@ def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: Model) -> bool:
     return _identically_zero([a + b for a, b in zip(lhs, Fr, strict=True)])
 
 
-def _refuse_non_smooth(exprs: Any, what: str) -> None:
-    """Refuse a part of the model holding a non-smooth function (``Abs``, ``sign`` ...:
-    :data:`~symmech.declaration.admissible.NON_SMOOTH`), naming it: symmech differentiates
-    every part (Christoffel symbols, gradients, impact maps)."""
-    found = sorted(
-        {type(f).__name__ for e in exprs for f in sp.sympify(e, strict=True).atoms(*NON_SMOOTH)}
-    )
-    if found:
-        raise SceneError(
-            f"from_mechanics: {what} contains the non-smooth functions {found} (Coulomb"
-            " friction, a simplified square root ...); symmech needs smooth loads and"
-            " kinematics: write it without them (a smooth law such as tanh(v/eps) for sign)"
-        )
-
-
 def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
     """The velocity constraints and the differentiated holonomic ones, independent rows."""
     bad = [e for e in model.velocity_offsets if e != 0]
     if bad:
         raise SceneError(
-            f"from_mechanics: velocity constraints with a part free of the speeds {bad}; symmech"
-            " takes homogeneous constraints mu(q) v = 0"
+            f"from_mechanics: {model.names['constraints']}: velocity constraints with a part"
+            f" free of the speeds {bad}; symmech takes homogeneous constraints mu(q) v = 0"
+            " (a constraint with a prescribed rate is prescribed motion)"
         )
     rows = [list(r) for r in model.velocity_rows]
     for h in model.holonomic:
@@ -486,20 +495,6 @@ def _singular_lagrangian(model: Model, involved: list, where: str) -> str:
     )
 
 
-@contextmanager
-def _reading(kind: str, what: str) -> Iterator[None]:
-    """Turn a failure of sympy (or of symmech's algebra) while reading ``what`` of the
-    model into a :class:`SceneError` naming the model and that part."""
-    try:
-        yield
-    except SceneError:
-        raise
-    except (ValueError, TypeError, ArithmeticError, AttributeError, NotImplementedError) as exc:
-        raise SceneError(
-            f"from_mechanics: {kind}: reading {what} failed ({type(exc).__name__}: {exc})"
-        ) from exc
-
-
 def scene_arguments(model: object, *, walls: Sequence = (), name: str | None = None) -> dict:
     """The keyword arguments of :class:`symmech.Scene` for a mechanics model (module
     docstring): coordinates, metric, potential, forces, constraints, frame and
@@ -509,9 +504,9 @@ def scene_arguments(model: object, *, walls: Sequence = (), name: str | None = N
     the metric and frame in symmech's symbols, and the declaration then has nothing left
     to translate."""
     kind = type(model).__name__
-    with _reading(kind, "its coordinates, speeds and kinematic equations"):
+    with reading(kind, "its coordinates, speeds and kinematic equations"):
         model_ = Model(model)
-    with _reading(kind, "its bodies and loads"):
+    with reading(kind, "its bodies and loads"):
         return _arguments(model_, kind, walls, name)
 
 
@@ -526,28 +521,32 @@ def _arguments(model_: Model, kind: str, walls: Sequence, name: str | None) -> d
         return tr.expr(value, field)
 
     S = plain(model_.S, "frame") if framed else None
-    with _reading(kind, "the constraints"):
+    with reading(kind, "the constraints"):
         model_rows = _constraint_rows(model_)
     if model_.lagrangian is not None:
-        with _reading(kind, "its Lagrangian"):
+        with reading(kind, "its Lagrangian"):
             M, V0 = _from_lagrangian(model_)
-        M = _regular_metric(M, model_rows, model_)
-        with _reading(kind, "the loads"):
+            M = _regular_metric(M, model_rows, model_)
+        with reading(kind, "the loads"):
             V, F = _loads(model_)
         M, V, F = plain(M, "metric"), plain(V + V0, "potential"), plain(F, "forces")
     else:
-        with _reading(kind, "the bodies' masses, inertias and velocities"):
+        with reading(kind, "the bodies' masses, inertias and velocities"):
             M = plain(_regular_metric(_metric(model_), model_rows, model_), "metric")
-        with _reading(kind, "the loads"):
+        with reading(kind, "the loads"):
             V, F = _loads(model_)
         V, F = plain(V, "potential"), plain(F, "forces")
-        with _reading(kind, "Kane's inertia forces"):
+        with reading(kind, "Kane's inertia forces"):
             correction = _embedded_correction(model_, tr, M, S)
         if correction is not None:
             F = [a + b for a, b in zip(F, correction, strict=True)]
     rows = [plain(r, f"constraints[{a}]") for a, r in enumerate(model_rows)]
     # (after the translation to real symbols, where sqrt(q**2) becomes Abs(q))
-    _refuse_non_smooth([e for r in rows for e in r], "a velocity or configuration constraint")
+    refuse_non_smooth(
+        [e for r in rows for e in r],
+        f"a velocity or configuration constraint ({model_.names['constraints']})",
+        _KINEMATICS_HINT,
+    )
     out: dict[str, Any] = {
         "metric": M,
         "potential": V,

@@ -11,6 +11,7 @@ from typing import Any
 import sympy as sp
 
 from symmech.errors import SceneError, SymmechWarning
+from symmech.mechanics.refusals import refuse_non_smooth
 
 __all__ = ["Model", "mechanics"]
 
@@ -65,11 +66,15 @@ class Model:
     holonomic: list[sp.Expr]
     origin: Any = None
     lagrangian: sp.Expr | None = None  # L = T - V of a Lagrange model (its own, or its bodies')
+    #: the model's attributes that hold each part, for the refusals ("kinematics":
+    #: q_dot = S u; "constraints": velocity and configuration constraints)
+    names: dict[str, str]
 
     def __init__(self, model: object):
         self.partials: dict = {}
         self.velocity_rows, self.velocity_offsets = [], []
         self.holonomic = []
+        self.names = {}
         kind = model_kind(model)
         if kind == "kane":
             self._kane(model)
@@ -77,6 +82,12 @@ class Model:
             self._lagrange(model, "LagrangesMethod")
         else:
             self._system(model)
+        if not self.q:
+            raise SceneError(
+                f"from_mechanics: the {type(model).__name__} has no generalized coordinates"
+                " (q): symmech needs one coordinate per degree of freedom (a System's"
+                " joints add theirs, or add_coordinates)"
+            )
         if self.S is None:
             self._check_basis_names()
 
@@ -102,6 +113,10 @@ class Model:
                 "from_mechanics: the KanesMethod has no bodies: its kanes_equations(bodies,"
                 " loads) were never formed and no bodies= were given; form them first"
             )
+        self.names = {
+            "kinematics": "KanesMethod.kd_eqs",
+            "constraints": "KanesMethod.velocity_constraints / configuration_constraints",
+        }
         self.q = list(k.q)
         self.frame = k._inertial
         self.bodies = list(k.bodies or [])
@@ -116,6 +131,10 @@ class Model:
         """A LagrangesMethod: its equations come from its Lagrangian (bodies= only records
         the bodies, their potential energies are in L) and its loads; the q_dot basis."""
         t = mechanics().dynamicsymbols._t
+        self.names = {
+            "lagrangian": f"the Lagrangian of the {source}",
+            "constraints": f"{source}: hol_coneqs / nonhol_coneqs",
+        }
         self.q = list(lm.q)
         self.frame = lm.inertial
         self.bodies = list(lm._bodies or [])
@@ -147,6 +166,11 @@ class Model:
             self._lagrange(s.eom_method, "System (eom_method=LagrangesMethod)")
             self.origin = s.fixed_point
             return
+        self.names = {
+            "kinematics": "System.kdes",
+            "lagrangian": "the Lagrangian of the System's bodies",
+            "constraints": "System.nonholonomic_constraints / holonomic_constraints",
+        }
         self.q = list(s.q)
         self.frame = s.frame
         self.origin = s.fixed_point
@@ -192,11 +216,21 @@ class Model:
         offset = (rhs - S * sp.Matrix(u)).applyfunc(sp.expand)
         if any(e != 0 for e in offset):
             raise SceneError(
-                f"from_mechanics: the kinematic differential equations must read q_dot = S(q) u;"
-                f" {list(offset)} is left over (a part free of the speeds)"
+                f"from_mechanics: {self.names['kinematics']}: the kinematic differential"
+                f" equations must read q_dot = S(q) u; {list(offset)} is left over (a part"
+                " free of the speeds: prescribed motion, which symmech's scleronomic systems"
+                " do not have); make the speeds' definitions homogeneous in the speeds"
             )
         if any(a.has(*u) or a.has(*qd) for a in S):
-            raise SceneError("from_mechanics: q_dot = S u with S depending on the speeds")
+            raise SceneError(
+                f"from_mechanics: {self.names['kinematics']}: q_dot = S u with S depending on"
+                " the speeds; symmech needs q_dot linear in the speeds"
+            )
+        refuse_non_smooth(
+            S,
+            f"{self.names['kinematics']} (q_dot = S(q) u)",
+            "write the kinematic differential equations without them",
+        )
         # speeds no kinematic equation reaches get an ignorable coordinate
         extra = [r for r in range(len(u)) if all(S[i, r] == 0 for i in range(S.rows))]
         if S.rows > len(u):
@@ -209,9 +243,10 @@ class Model:
             )
         if S.rows + len(extra) != len(u):
             raise SceneError(
-                f"from_mechanics: {len(self.q)} coordinates and {len(u)} speeds; the speeds"
-                f" {[u[r] for r in extra]} reach no coordinate, which leaves the frame S"
-                " non-square"
+                f"from_mechanics: {self.names['kinematics']}: {len(self.q)} coordinates and"
+                f" {len(u)} speeds; the speeds {[u[r] for r in extra]} reach no coordinate,"
+                " which leaves the frame S non-square (give each speed a coordinate whose"
+                " rate it sets, or leave it out)"
             )
         taken = {str(c.func) for c in (*self.q, *u)}
         for r in extra:
