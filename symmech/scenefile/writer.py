@@ -13,6 +13,7 @@ from sympy.core.function import AppliedUndef
 from sympy.printing.str import StrPrinter
 
 from symmech.declaration.drawing import SHAPES, Drawing
+from symmech.declaration.expression_rules import text_nodes
 from symmech.declaration.expressions import (
     parse_expression,
     to_expression,
@@ -62,11 +63,17 @@ class _FilePrinter(StrPrinter):
         return super()._print_Function(expr)
 
 
-def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
+def _rewritten(expr: sp.Expr) -> sp.Expr:
+    """``expr`` as the file writes it: cot, sec, csc and their hyperbolic kin as 1/tan, ..."""
     expr = sp.sympify(expr, strict=True)
     for fn, rewrite in _REWRITES.items():
         if expr.has(fn):
             expr = expr.replace(fn, rewrite)
+    return expr
+
+
+def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
+    expr = _rewritten(expr)
     if expr.has(sp.Derivative, sp.Integral, sp.Subs):
         raise SceneFileError([f"{where}: cannot write {_short(expr, 60)}: it holds a derivative"])
     text = _FilePrinter().doprint(expr)
@@ -377,7 +384,10 @@ def _check_readable(text: str, exprs: Sequence[sp.Expr]) -> None:
     """Refuse to write what the reader would refuse by its cost limits (the file's bytes,
     nodes and distinct function applications: :mod:`symmech.scenefile.format`)."""
     size = len(text.encode("utf-8"))
-    nodes = sum(tree_size(sp.sympify(e, strict=True)) for e in exprs)
+    nodes = 0
+    for e in exprs:  # what the reader charges: the nodes parsed or built, the larger
+        written = _rewritten(e)
+        nodes += max(tree_size(written), text_nodes(_FilePrinter().doprint(written)))
     calls = len(applications(text))
     over = [
         f"{what} {value} (limit {name}={limit})"
