@@ -41,3 +41,10 @@ def test_a_velocity_inside_a_function_counts_every_pair_of_its_velocities():
     f = sp.Matrix([sp.sin(v[0]) * v[1] * sp.cos(q[0]), 0, v[2] ** 2])
     # entry 0: (0,0), (0,1), (1,1) as a bound; entry 2: (2,2)
     assert _zeros(forcing_notes(f, v, False)[0]) == (True, 18 - 4)
+
+
+def test_numbers_that_are_not_rational_are_coefficients_like_any_other():
+    # pi, E, I, floats: parts of the coefficients (sympy's ring over QQ takes none of them)
+    for c in (sp.pi, sp.E, sp.I, sp.Float(0.25)):
+        f = sp.Matrix([c * (v[0] + c * v[1]) * (v[0] - c * v[1]), 0, 0])
+        assert _zeros(forcing_notes(f, v, False)[0]) == (False, 18 - 2), c

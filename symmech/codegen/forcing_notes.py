@@ -46,14 +46,18 @@ class _Skeleton:
         return out if moving else self._part(e)
 
     def _part(self, e: sp.Basic) -> sp.Basic:
-        return e if e.is_Atom else self._parts.setdefault(e, sp.Dummy())
+        # symbols and rational or float numbers stay (the ring's generators and its
+        # coefficients, so 0.25 and -0.25 cancel); any other part, pi or I included,
+        # becomes a symbol
+        keep = e.is_Symbol or e.is_Rational or e.is_Float
+        return e if keep else self._parts.setdefault(e, sp.Dummy())
 
     def _visit(self, e: sp.Basic) -> tuple[sp.Basic, bool]:
         hit = self._memo.get(e)
         if hit is not None:
             return hit
         if e.is_Atom:
-            out = (e, e in self._v)
+            out = (e, e in self._v) if e.is_Symbol or e.is_Number else (self._part(e), False)
         else:
             parts = [self._visit(a) for a in e.args]
             if not any(moving for _, moving in parts):
