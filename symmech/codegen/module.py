@@ -3,8 +3,9 @@
 :class:`SceneModule` wraps the raw generated functions (calls into the compiled library,
 or the functions of the imported NumPy module) and gives both backends one API.  A C
 function of the state and the parameters called for one state goes through a CPython
-extension compiled next to the library (template ``c/python_module.c.jinja``: about half
-a microsecond of overhead), batches and everything else through ctypes; a mapping of
+extension compiled with the library into one shared object (template
+``c/python_module.c.jinja``: about half a microsecond of overhead), batches and
+everything else through ctypes (the same shared object); a mapping of
 parameters whose keys are exactly their names, and a time given to a function that does
 not read it, take that route too.  :meth:`SceneModule.bind` binds the parameters once
 (:mod:`symmech.codegen.bound`) for callers that evaluate at the same parameters many times:
