@@ -5,24 +5,38 @@ For the Whipple bicycle of sympy's own test suite (Meijaard et al. 2007; 4 coord
 
 * KanesMethod: the seconds it takes to form the equations (its construction and
   ``kanes_equations``; the kinematics, common to both routes, excluded): the baseline;
-* symmech, after clearing sympy's cache (so nothing of Kane's work is reused):
-  ``Scene.from_mechanics`` (reading the bodies and loads, the validation of the
-  declaration), then ``codegen.generate(target="c")`` (strategy auto) and the compilation;
-* the ratios symmech / KanesMethod (the issue's target: derivation plus C generation
-  faster than KanesMethod alone, a ratio below 1);
 * a second baseline, what a PyDy user runs after KanesMethod: one ``sympy.cse`` over
   Kane's ``mass_matrix_full`` and ``forcing_full`` (dynamic symbols swapped for plain
-  ones), then C printing, and KanesMethod plus that;
-* the same for the equations of motion alone: a fresh import, then
-  ``generate(..., functions=["rhs"])`` (``rhs`` and the ``acceleration`` it calls: what
-  KanesMethod's equations give; the default also emits the mass matrix, the forcing, the
-  energy, the multipliers and the constraint residual);
+  ones), then C printing, and KanesMethod plus that (the "route");
+* symmech, twice, each after clearing sympy's cache (so nothing of Kane's work, or of the
+  other run, is reused): every function (the default of ``codegen.generate``: the mass
+  matrix, the forcing, the energy, the multipliers, the constraint residual, ``rhs``),
+  then ``functions=["rhs"]`` (``rhs`` and the ``acceleration`` it calls: what
+  KanesMethod's equations give).  Each: ``Scene.from_mechanics`` (reading the bodies and
+  loads, the validation of the declaration), ``codegen.generate(target="c")`` (strategy
+  auto), and the compilation and loading in an empty library cache (``load``: one gcc
+  run, -O2, the CPython extension and the library in one shared object); the ratios to
+  KanesMethod;
 * the target of issue 25, from the model as built to loaded C of the equations of motion
-  (import, generation of ``rhs``, compilation in an empty library cache) against
-  KanesMethod plus the PyDy route (target: a ratio below 1), and the full set of
-  functions the same way (target: within 1.5x).
+  (import, generation of ``rhs``, compilation) against KanesMethod plus the PyDy route
+  (target: a ratio below 1), and the full set of functions the same way (target: within
+  1.5x).
 
-Usage: python3 benchmarks/mechanics.py [--quick]
+Where the time goes (``--profile``: cProfile of the rhs run, 13.7 s under the profiler
+on a loaded machine; the shares of that Python work): the import 43 %
+(``mechanics.convert``: the metric from the partial velocities 14 %, Kane's inertia
+forces and their comparison with the metric's at random points 13 %, then the
+declaration's checks), the stable forms of the velocity-free entries 23 %
+(``algebra.stability.stable_coefficient``: together, cancel and factor per entry), CSE
+and printing 15 % (``codegen.lower``), the forcing and the note on its zero connection
+coefficients 6 %.  The compilation (one gcc run at -O2, which the profiler does not
+slow) is about 1 s of the route on a quiet machine.  Nothing is cached between the
+routes: sympy's cache is cleared and each library is built in an empty folder.  gcc at
+-O1 instead of -O2 would save about a fifth of the compilation (0.96 s against 1.23 s
+for the bicycle's ``rhs`` file); the default stays -O2 (the benchmark measures what a
+user gets).
+
+Usage: python3 benchmarks/mechanics.py [--quick] [--profile]
 
 ``--quick`` (a smoke test) runs every step on the 1-link pendulum on a cart of
 ``benchmarks/derive.py`` (KanesMethod of sympy.physics.mechanics) instead of the bicycle.
@@ -75,62 +89,74 @@ def small_model(timings: dict) -> object:
     return KM
 
 
+def symmech_route(KM: object, name: str, functions: list[str] | None) -> dict[str, float]:
+    """Seconds of symmech's route from the model to loaded C, sympy's cache cleared first:
+    ``import`` (``Scene.from_mechanics``), ``generate`` (``codegen.generate``, C, the
+    given functions or all) and ``compile`` (``load`` in an empty library cache)."""
+    clear_cache()  # nothing of Kane's work (or of an earlier route) reused
+    t0 = time.perf_counter()
+    scene = sm.Scene.from_mechanics(KM, name=name)
+    t1 = time.perf_counter()
+    code = sm.codegen.generate(scene, target="c", functions=functions)
+    t2 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as cache:
+        code.load(cache=cache)
+    t3 = time.perf_counter()
+    return {"import": t1 - t0, "generate": t2 - t1, "compile": t3 - t2}
+
+
+def profile_rhs(KM: object, lines: int = 25) -> None:
+    """cProfile of the ``rhs`` route (import, generation, compilation): the symmech
+    functions and the sympy entry points that take the longest, cumulative."""
+    import cProfile
+    import pstats
+
+    profiler = cProfile.Profile()
+    profiler.runcall(symmech_route, KM, "bicycle_rhs", ["rhs"])
+    stats = pstats.Stats(profiler).sort_stats("cumulative")
+    stats.print_stats(r"symmech/|cse_main|polytools.py:.*\(factor\)|subprocess.py:.*\(run\)", lines)
+
+
+def _line(label: str, seconds: float, base: float | None = None, note: str = "") -> None:
+    ratio = f"   {seconds / base:6.2f}x" if base else ""
+    print(f"{label:48s} {seconds:8.2f}{ratio}{note}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="a smoke test (see the docstring)")
-    quick = ap.parse_args().quick
+    ap.add_argument("--profile", action="store_true", help="also cProfile the rhs route")
+    args = ap.parse_args()
     timings: dict = {}
-    KM = small_model(timings) if quick else sympy_bicycle(timings)[0]
+    KM = small_model(timings) if args.quick else sympy_bicycle(timings)[0]
     kane = timings["kane"]
     pydy = pydy_generation(KM)
-    warnings.simplefilter("ignore")
-    clear_cache()  # nothing of Kane's work reused through sympy's cache
-    t0 = time.perf_counter()
-    scene = sm.Scene.from_mechanics(KM, name="bicycle")
-    t1 = time.perf_counter()
-    code = sm.codegen.generate(scene, target="c")
-    t2 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        code.write(tmp)
-        t3 = time.perf_counter()
-        code.load()
-        t4 = time.perf_counter()
-    imp, gen, comp = t1 - t0, t2 - t1, t4 - t3
-    model = "1-link pendulum on a cart (--quick)" if quick else "Whipple bicycle (sympy test_kane3)"
-    print(f"{model}, seconds on this machine")
-    print(f"{'KanesMethod forms the equations (baseline)':48s} {kane:8.2f}")
-    print(f"{'PyDy route: cse + C printing of Kane M, f':48s} {pydy:8.2f}")
-    print(f"{'KanesMethod + PyDy route':48s} {kane + pydy:8.2f}")
-    print(f"{'symmech Scene.from_mechanics':48s} {imp:8.2f}   {imp / kane:6.2f}x")
-    print(f"{'symmech codegen.generate (C)':48s} {gen:8.2f}   {gen / kane:6.2f}x")
-    print(f"{'compile and load':48s} {comp:8.2f}")
-    total = imp + gen
-    print(f"{'symmech derivation + C generation':48s} {total:8.2f}   {total / kane:6.2f}x")
-    clear_cache()
-    t0 = time.perf_counter()
-    scene = sm.Scene.from_mechanics(KM, name="bicycle_rhs")
-    t1 = time.perf_counter()
-    code_rhs = sm.codegen.generate(scene, target="c", functions=["rhs"])
-    t2 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as cache:
-        code_rhs.load(cache=cache)
-    t3 = time.perf_counter()
-    rhs, rhs_gen = t2 - t0, t2 - t1
-    label = "symmech codegen.generate (C), functions=[rhs]"
-    print(f"{label:48s} {rhs_gen:8.2f}   {rhs_gen / kane:6.2f}x")
-    print(f"{'symmech derivation + C generation of rhs':48s} {rhs:8.2f}   {rhs / kane:6.2f}x")
     route = kane + pydy
-    loaded_rhs = t3 - t0
+    warnings.simplefilter("ignore")
+    full = symmech_route(KM, "bicycle", None)
+    rhs = symmech_route(KM, "bicycle_rhs", ["rhs"])
+    quick = "1-link pendulum on a cart (--quick)"
+    print(
+        f"{quick if args.quick else 'Whipple bicycle (sympy test_kane3)'}, seconds on this machine"
+    )
+    _line("KanesMethod forms the equations (baseline)", kane)
+    _line("PyDy route: cse + C printing of Kane M, f", pydy)
+    _line("KanesMethod + PyDy route", route)
+    for what, t in (("", full), (", functions=[rhs]", rhs)):
+        _line(f"symmech Scene.from_mechanics{what and ' (rhs run)'}", t["import"], kane)
+        _line(f"symmech codegen.generate (C){what}", t["generate"], kane)
+        _line(f"compile and load (empty cache){what and ', rhs'}", t["compile"])
+        _line(
+            f"symmech derivation + C generation{what and ', rhs'}",
+            t["import"] + t["generate"],
+            kane,
+        )
     print("issue 25: from the model to loaded C, against KanesMethod + PyDy route")
     label = "symmech rhs: import + generation + compilation"
-    print(f"{label:48s} {loaded_rhs:8.2f}   {loaded_rhs / route:6.2f}x  (target < 1)")
-    with tempfile.TemporaryDirectory() as cache:
-        t4 = time.perf_counter()
-        code.load(cache=cache)
-        cold = time.perf_counter() - t4
-    full = imp + gen + cold
-    label = "symmech all functions: the same"
-    print(f"{label:48s} {full:8.2f}   {full / route:6.2f}x  (target < 1.5)")
+    _line(label, sum(rhs.values()), route, "  (target < 1)")
+    _line("symmech all functions: the same", sum(full.values()), route, "  (target < 1.5)")
+    if args.profile:
+        profile_rhs(KM)
 
 
 if __name__ == "__main__":

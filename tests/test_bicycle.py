@@ -14,18 +14,28 @@ of the same names, and differentiated by central differences of step 1e-15 (trun
 error about 1e-30).  So the comparison is limited by the published digits and the
 model's float64 parameters, not by float64 differences, and it checks the code's own
 operations: a wrong term in the generated rhs moves an eigenvalue by far more.
+
+The same linearization is also taken in float64, as a user's code runs: by complex step
+(Squire and Trapp 1998: f'(x) = Im f(x + ih)/h, no subtractive cancellation, exact to
+rounding for h = 1e-30) through the same single-state path on complex numbers, and the
+speeds found by ``scipy.optimize.brentq`` on the real parts.  The symbolic Jacobian that
+``codegen.generate(..., functions=["jacobian"])`` emits is not used: for the bicycle it is
+over its budget (``CLOSED_FORM_SECONDS``) and left out with a note.
 """
 
 from __future__ import annotations
 
+import cmath
 import importlib.util
 import re
 import types
 
 import mpmath
+import numpy as np
 import pytest
 import sympy as sp
 from mechanics_models import sympy_bicycle
+from scipy.optimize import brentq
 
 import symmech as sm
 
@@ -91,20 +101,30 @@ def bicycle():
 
 
 @pytest.fixture(scope="module")
-def linearization(bicycle, tmp_path_factory):
-    """A function of the speed v: the 4 x 4 state matrix of (lean, steer, lean rate, steer
-    rate), as an mpmath matrix."""
+def generated(bicycle, tmp_path_factory):
+    """The path of the generated NumPy module (rhs and constraint_residual), its
+    parameters' names in order, and sympy's values by name."""
     scene, val_dict = bicycle
     code = sm.codegen.generate(scene, target="numpy", functions=["rhs", "constraint_residual"])
     folder = tmp_path_factory.mktemp("bicycle")
     code.write(folder)
     (path,) = folder.rglob("symmech_bicycle.py")
-    mod = _mpmath_module(path)
-    names = [n.strip() for n in mod.__doc__.split("p: ", 1)[1].splitlines()[0].split(",")]
-    mpmath.mp.dps = DIGITS
+    text = path.read_text()
+    names = [n.strip() for n in text.split("  p: ", 1)[1].splitlines()[0].split(",")]
     values = {k.name: v for k, v in val_dict.items() if isinstance(k, sp.Symbol)}
-    params = [mpmath.mpf(sp.Float(values[n], DIGITS)) for n in names]
     assert values["g"] == 9.81
+    return path, names, values
+
+
+@pytest.fixture(scope="module")
+def linearization(bicycle, generated):
+    """A function of the speed v: the 4 x 4 state matrix of (lean, steer, lean rate, steer
+    rate), as an mpmath matrix."""
+    scene, _ = bicycle
+    path, names, values = generated
+    mod = _mpmath_module(path)
+    mpmath.mp.dps = DIGITS
+    params = [mpmath.mpf(sp.Float(values[n], DIGITS)) for n in names]
     qn = [str(c) for c in scene.coordinates]
     vn = [str(c) for c in scene.velocities]
     n = scene.n
@@ -186,6 +206,104 @@ def test_weave_and_capsize_speeds_match_table_2(linearization):
     assert _close(capsize(7), 0.10268170574766)
 
 
+# ------------------------------------------------------------ float64, by complex step
+
+#: the complex step: far below float64's resolution of the real part, so Im f(x + ih)/h is
+#: f'(x) to rounding and the real part is f(x) itself
+STEP_64 = 1e-30
+#: What float64 gives here: every eigenvalue of Table 2 within 3.4e-14 (relative, or
+#: absolute below 1), the speeds within 5.3e-15 (weave) and 4.4e-15 (capsize) of the
+#: published 4.29238253634111 and 6.02426201538837: the complex step has no subtractive
+#: cancellation, so the matrix is the rhs's rounding (a few ulps) away from exact, the
+#: 4 x 4 eigenproblem is well conditioned, and the real parts cross zero with slopes of
+#: order 1 (weave) and 0.1 (capsize) per m/s.  The bounds leave a margin for another
+#: BLAS or libm.
+RELATIVE_64 = 1e-13
+TOLERANCE_64 = 5e-14
+
+
+class _Step(complex):
+    """A complex number ordered by its real part and closed under arithmetic: the
+    generated code's checks (``if not M0_0 > 0.0``) compare the float64 values the real
+    parts carry, the imaginary parts carry the derivative along."""
+
+    def __lt__(self, other):
+        return self.real < other.real
+
+    def __le__(self, other):
+        return self.real <= other.real
+
+    def __gt__(self, other):
+        return self.real > other.real
+
+    def __ge__(self, other):
+        return self.real >= other.real
+
+
+for _name in ("add", "sub", "mul", "truediv", "pow"):
+    for _side in ("", "r"):
+        _op = getattr(complex, f"__{_side}{_name}__")
+        setattr(_Step, f"__{_side}{_name}__", lambda a, b, _op=_op: _Step(_op(a, b)))
+for _name in ("neg", "pos"):
+    _op = getattr(complex, f"__{_name}__")
+    setattr(_Step, f"__{_name}__", lambda a, _op=_op: _Step(_op(a)))
+
+
+def _complex_step_module(path) -> types.ModuleType:
+    """The generated NumPy module, its single-state functions running on :class:`_Step`
+    numbers: each ``math.f`` it calls becomes ``cmath.f`` (analytic: sin, cos, sqrt)."""
+    spec = importlib.util.spec_from_file_location("symmech_bicycle_cs", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    names = set(re.findall(r"\bmath\.(\w+)", path.read_text())) - {"isfinite"}
+    lifted = {n: _lifted(getattr(cmath, n)) for n in names}
+    module.math = types.SimpleNamespace(isfinite=cmath.isfinite, **lifted)
+    return module
+
+
+def _lifted(f):
+    """``f`` of cmath returning a :class:`_Step`."""
+    return lambda z: _Step(f(z))
+
+
+@pytest.fixture(scope="module")
+def linearization_64(bicycle, generated):
+    """A function of the speed v: the float64 4 x 4 state matrix of (lean, steer, lean
+    rate, steer rate), each column by one complex step through the generated rhs."""
+    scene, _ = bicycle
+    path, names, values = generated
+    mod = _complex_step_module(path)
+    params = [float(values[n]) for n in names]
+    qn = [str(c) for c in scene.coordinates]
+    vn = [str(c) for c in scene.velocities]
+    n = scene.n
+    ind = [vn.index(u) for u in ("u2", "u3", "u5")]  # lean rate, rear wheel, steer rate
+    dep = [vn.index(u) for u in ("u1", "u4", "u6")]  # yaw and pitch rates, front wheel
+    rows = [qn.index("q2"), qn.index("q5"), n + vn.index("u2"), n + vn.index("u5")]
+    rear = params[names.index("WRrad")]
+
+    def xdot(x, speed):
+        q, v = [_Step(0)] * n, [_Step(0)] * n
+        q[qn.index("q2")], q[qn.index("q5")] = x[0], x[1]
+        v[vn.index("u2")], v[vn.index("u5")] = x[2], x[3]
+        v[vn.index("u3")] = _Step(speed / rear)  # the rear wheel's spin
+        unit = [[float(i == j) for i in range(n)] for j in range(n)]
+        mu = np.array([mod._one_constraint_residual(q, e, params) for e in unit]).T
+        b = mu[:, ind] @ np.array([v[c] for c in ind])
+        for c, value in zip(dep, np.linalg.solve(mu[:, dep], -b), strict=True):
+            v[c] = _Step(value)
+        out = mod._one_rhs(q + v, params)
+        return np.array([out[r] for r in rows])
+
+    def matrix(speed: float) -> np.ndarray:
+        columns = [
+            xdot([_Step(STEP_64 * 1j * (i == j)) for i in range(4)], speed) for j in range(4)
+        ]
+        return np.array(columns).T.imag / STEP_64
+
+    return matrix
+
+
 def test_the_imported_bicycle_saves_and_reloads_as_the_same_scene(bicycle, tmp_path):
     """A scene file holds the imported model (forcing entries of 53,000 characters): the
     declaration read back is the one written, expression for expression (srepr)."""
@@ -198,3 +316,39 @@ def test_the_imported_bicycle_saves_and_reloads_as_the_same_scene(bicycle, tmp_p
     assert sp.srepr(back.frame) == sp.srepr(ours.frame)
     assert sp.srepr(back.constraint_matrix) == sp.srepr(ours.constraint_matrix)
     assert max(len(e) for e in path.read_text().split('"')) > 10_000  # (long entries)
+
+
+def _close_64(ours: float, published: float) -> bool:
+    return abs(ours - published) <= RELATIVE_64 * max(1.0, abs(published))
+
+
+def test_float64_eigenvalues_by_complex_step_match_table_2(linearization_64):
+    """Every eigenvalue of Table 2 at v = 0..10 m/s from the float64 linearization."""
+    still = np.sort(np.linalg.eigvals(linearization_64(0.0)).real)
+    assert all(_close_64(a, b) for a, b in zip(still, STILL, strict=True)), still
+    for speed, (capsize, (re_w, im_w), castering) in TABLE_2.items():
+        eig = np.linalg.eigvals(linearization_64(float(speed)))
+        real = np.sort(eig[np.abs(eig.imag) < 1e-9].real)
+        pair = eig[np.abs(eig.imag) >= 1e-9]
+        assert len(real) == 2 and len(pair) == 2, (speed, eig)
+        assert _close_64(real[0], castering) and _close_64(real[1], capsize), (speed, real)
+        for z in pair:
+            assert _close_64(z.real, re_w) and _close_64(abs(z.imag), im_w), (speed, z)
+
+
+def test_float64_weave_and_capsize_speeds_by_brentq(linearization_64):
+    """The speeds where the weave pair's and the capsize eigenvalue's real parts cross
+    zero, by brentq on the float64 linearization, to the published digits."""
+
+    def weave(speed: float) -> float:
+        eig = np.linalg.eigvals(linearization_64(speed))
+        return float(eig[np.abs(eig.imag) > 1].real.max())
+
+    def capsize(speed: float) -> float:
+        eig = np.linalg.eigvals(linearization_64(speed))
+        return float(eig[np.abs(eig.imag) < 1e-9].real.max())
+
+    weave_speed = brentq(weave, 4.0, 5.0, xtol=1e-15, rtol=1e-15)
+    capsize_speed = brentq(capsize, 6.0, 6.1, xtol=1e-15, rtol=1e-15)
+    assert abs(weave_speed - WEAVE) < TOLERANCE_64, weave_speed
+    assert abs(capsize_speed - CAPSIZE) < TOLERANCE_64, capsize_speed

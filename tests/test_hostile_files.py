@@ -225,19 +225,26 @@ def _library_path(folder, code):
 
 def test_a_planted_library_in_the_cache_is_rebuilt_not_loaded(tmp_path):
     """A file at the cached library's name that another user could have written (here:
-    writable by group and others) is code: it is rebuilt and replaced, not loaded."""
+    writable by group and others) is code: it is rebuilt and replaced, not loaded; so is
+    one at the name of the shared object that holds the library and its CPython
+    extension (the default build, where the headers are)."""
     from symmech.examples import bouncing_ball
 
     code = sm.codegen.generate(bouncing_ball(), "c")
-    cache = tmp_path / "cache"
-    cache.mkdir(mode=0o700)
-    planted = _library_path(cache, code)
-    planted.write_bytes(b"not a library")
-    planted.chmod(0o666)
-    mod = code.load(cache=cache)
-    assert mod.call("energy", [1.0], [0.0], params={"m": 1.0, "g": 2.0, "alpha": 0.5}) == 2.0
-    assert planted.read_bytes()[:4] == b"\x7fELF"
-    assert planted.stat().st_mode & 0o022 == 0
+    names = {False: _library_path(tmp_path, code).name}
+    names[True] = code.load(cache=tmp_path / "probe").path.name  # the default build's name
+    for extension, name in names.items():
+        cache = tmp_path / f"cache_{extension}"
+        cache.mkdir(mode=0o700)
+        planted = cache / name
+        planted.write_bytes(b"not a library")
+        planted.chmod(0o666)
+        mod = code.load(cache=cache, extension=extension)
+        assert mod.path == planted
+        params = {"m": 1.0, "g": 2.0, "alpha": 0.5}
+        assert mod.call("energy", [1.0], [0.0], params=params) == 2.0
+        assert planted.read_bytes()[:4] == b"\x7fELF"
+        assert planted.stat().st_mode & 0o022 == 0
 
 
 def test_a_cache_folder_any_user_may_write_is_refused_unless_sticky(tmp_path):

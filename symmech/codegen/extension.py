@@ -1,6 +1,8 @@
 """The CPython extension of a C target: the entry points of its functions of the state and
-the parameters for one state (template ``c/python_module.c.jinja``), compiled next to the
-library and imported by :func:`symmech.codegen.module.load_generated`."""
+the parameters for one state (template ``c/python_module.c.jinja``), compiled with the
+library's sources into one shared object, imported by
+:func:`symmech.codegen.module.load_generated`, which also loads that object through
+ctypes for the general path (so the generated code is compiled once, not twice)."""
 
 from __future__ import annotations
 
@@ -34,9 +36,10 @@ def build_extension(
     compiler: str | None,
     flags: Sequence[str],
     cache: str | Path | None,
-) -> tuple[Any, str]:
-    """The CPython extension of ``code`` (see :func:`extension_source`) and a
-    description; or (None, why not)."""
+) -> tuple[Any, str, Path | None]:
+    """The CPython extension of ``code`` (see :func:`extension_source`), a description,
+    and the path of its shared object (which holds the library's functions as well, for
+    ctypes); or (None, why not, None)."""
     import importlib.machinery
     import sysconfig
 
@@ -44,9 +47,9 @@ def build_extension(
 
     includes, missing = extension_includes()
     if missing:
-        return None, f"ctypes (no CPython extension: {missing})"
+        return None, f"ctypes (no CPython extension: {missing})", None
     if not code.extension:
-        return None, "ctypes (no function of the state and parameters only)"
+        return None, "ctypes (no function of the state and parameters only)", None
     cc = find_compiler(compiler)
     # the key covers the extension's own source (its template may change while the
     # library's sources do not), rendered with a placeholder module name
@@ -83,6 +86,6 @@ def build_extension(
             sys.modules[name] = ext
     except (SymmechError, ImportError, OSError) as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        return None, f"ctypes (the CPython extension failed: {first})"
+        return None, f"ctypes (the CPython extension failed: {first})", None
     ext._configure(NumericalError)
-    return ext, f"CPython extension {path.name} (one state), ctypes (batches)"
+    return ext, f"CPython extension {path.name} (one state), ctypes (batches)", path

@@ -54,9 +54,9 @@ class GeneratedCode:
     operation counts.  :meth:`write` saves the files, :meth:`load` compiles (C) or imports
     (NumPy) them and returns a :class:`~symmech.codegen.module.SceneModule`.
     ``extension`` (C only) is the source of the CPython extension that the loader compiles
-    next to the library for one-state calls (template ``c/python_module.c.jinja``; its
-    module name is the macro ``SYMMECH_EXT_MODULE``); it is not part of the library and
-    :meth:`write` does not write it.
+    with the library's sources into one shared object for one-state calls (template
+    ``c/python_module.c.jinja``; its module name is the macro ``SYMMECH_EXT_MODULE``); it
+    is not part of the written library and :meth:`write` does not write it.
     """
 
     scene_name: str

@@ -27,6 +27,7 @@ from symmech.codegen.blocks import (
     vector_block,
     wall_function_name,
 )
+from symmech.codegen.forcing_notes import forcing_notes
 from symmech.declaration.symbols import t as TIME
 
 if TYPE_CHECKING:
@@ -446,59 +447,6 @@ def jacobian(scene: Scene) -> sp.Matrix | str:
             return ydot.jacobian(list(scene.coordinates) + list(scene.velocities))
     except BudgetExceeded as exc:
         return f"jacobian: {exc}; not emitted (implicit methods then need another Jacobian)"
-
-
-def forcing_notes(f: sp.Matrix, v: Sequence[sp.Symbol], frame: bool) -> list[str]:
-    """What the forcing does not compute: the identically zero coefficients of its
-    velocity-quadratic part (Gamma_kij, or the connection coefficients omega_kij in a
-    frame, symmetrised in i, j: only the symmetric part enters f) and its zero entries."""
-    n = len(v)
-    index = {s: i for i, s in enumerate(v)}
-    total = n * n * (n + 1) // 2
-    present: set[tuple[int, int, int]] = set()
-
-    def monomials(k: int, e: sp.Expr, expanded: bool = False) -> None:
-        for term in sp.Add.make_args(e):
-            idx: list[int] = []
-            plain = True
-            for factor in sp.Mul.make_args(term):
-                base, power = factor.as_base_exp()
-                if base in index and power.is_Integer and power > 0:
-                    idx += [index[base]] * int(power)
-                elif factor.free_symbols & index.keys():
-                    plain = False
-            if (
-                not plain
-                and not expanded
-                and limits.expanded_terms(term, limits.NOTE_EXPAND_TERMS + 1)[0]
-                <= limits.NOTE_EXPAND_TERMS
-            ):
-                monomials(k, sp.expand(term), True)
-            elif not plain:
-                # too large to expand for a note: count every pair of its velocities as
-                # present (the note then gives a lower bound of the zeros)
-                inside = sorted(index[s] for s in term.free_symbols & index.keys())
-                present.update((k, a, b) for a in inside for b in inside if a <= b)
-                bounded.append(k)
-            elif len(idx) == 2:
-                present.add((k, min(idx), max(idx)))
-
-    bounded: list[int] = []
-    for k, e in enumerate(f):
-        monomials(k, e)
-    nonzero = len(present)
-    what = "connection coefficients omega_k(ij)" if frame else "Christoffel symbols Gamma_k(ij)"
-    notes = [
-        f"forcing: {'at least ' if bounded else ''}{total - nonzero} of the {total} {what}"
-        " (symmetrised in i, j) are identically zero and are never computed"
-    ]
-    zeros = [k for k, e in enumerate(f) if e == 0]
-    if zeros:
-        notes.append(
-            f"forcing: entries {zeros} are identically zero (no velocity or potential term);"
-            " they are stored as 0.0 without computation"
-        )
-    return notes
 
 
 def impact_scalars(w: ResolvedWall, psi_t: sp.Expr) -> Block:

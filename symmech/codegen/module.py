@@ -3,8 +3,9 @@
 :class:`SceneModule` wraps the raw generated functions (calls into the compiled library,
 or the functions of the imported NumPy module) and gives both backends one API.  A C
 function of the state and the parameters called for one state goes through a CPython
-extension compiled next to the library (template ``c/python_module.c.jinja``: about half
-a microsecond of overhead), batches and everything else through ctypes; a mapping of
+extension compiled with the library into one shared object (template
+``c/python_module.c.jinja``: about half a microsecond of overhead), batches and
+everything else through ctypes (the same shared object); a mapping of
 parameters whose keys are exactly their names, and a time given to a function that does
 not read it, take that route too.  :meth:`SceneModule.bind` binds the parameters once
 (:mod:`symmech.codegen.bound`) for callers that evaluate at the same parameters many times:
@@ -505,9 +506,11 @@ def load_generated(
     """Build (C) or import (NumPy) ``code`` and wrap it in a :class:`SceneModule`.
 
     For C, one-state calls of the functions of the state and the parameters go through a
-    CPython extension built next to the library (``extension=True`` and the Python and
-    NumPy headers present), else through ctypes; :attr:`SceneModule.fast_path` says which
-    and why.  Both give the same doubles: they call the same compiled function.
+    CPython extension (``extension=True`` and the Python and NumPy headers present), else
+    through ctypes; :attr:`SceneModule.fast_path` says which and why.  Both give the same
+    doubles: they call the same compiled function.  The extension is compiled with the
+    generated sources into one shared object, which ctypes loads too (one compilation);
+    without the extension the library is compiled alone.
     """
     if code.target == "numpy":
         module, path = _import_numpy_module(code, cache_dir(cache))
@@ -530,7 +533,14 @@ def load_generated(
     kwargs: dict[str, Any] = {"compiler": compiler, "cache": cache}
     if flags is not None:
         kwargs["flags"] = tuple(flags)
-    library = compile_library(dict(code.files), **kwargs)
+    ext, how, library = None, "ctypes (extension=False)", None
+    if extension:
+        # one build: the extension's shared object holds the library's functions too
+        ext, how, library = build_extension(
+            code, compiler, kwargs.get("flags", DEFAULT_FLAGS), cache
+        )
+    if library is None:
+        library = compile_library(dict(code.files), **kwargs)
     lib = load_library(library)
     prefix = f"{code.stem}_"
     n_inputs = len(code.plan.inputs)
@@ -541,11 +551,8 @@ def load_generated(
     }
     raw = {name: general for name, (general, _) in callers.items()}
     fast = {name: quick for name, (_, quick) in callers.items() if quick is not None}
-    how = "ctypes (extension=False)"
-    if extension:
-        ext, how = build_extension(code, compiler, kwargs.get("flags", DEFAULT_FLAGS), cache)
-        if ext is not None:
-            fast.update({name: getattr(ext, name) for name in fast if hasattr(ext, name)})
+    if ext is not None:
+        fast.update({name: getattr(ext, name) for name in fast if hasattr(ext, name)})
     module = SceneModule(code, raw, library, fast)
     module._library = lib  # keep the library alive as long as the module
     module.fast_path = how

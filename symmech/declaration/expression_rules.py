@@ -345,6 +345,33 @@ def _check_brackets(src: _Source, max_depth: int) -> None:
                 depth = max(0, depth - 1)
 
 
+#: a run of word characters and dots (a name, a number such as 1_000, 0x1F, 2.5j, with an
+#: exponent's sign: 1e-5), or of operator characters (``+``, ``**``, ``*-``): each is at
+#: least one node of the expression's tree (an operand, an operation)
+_NODE = re.compile(r"[\w.]+(?:(?<=[eE])[+-][\w.]+)?|[-+*/%@<>=!&|^~]+")
+
+
+def text_nodes(text: str) -> int:
+    """A lower bound of the nodes (operands and operations) of the tree of the valid
+    expression ``text``, read from its text alone: the runs of :data:`_NODE`."""
+    return sum(1 for _ in _NODE.finditer(text))
+
+
+def _check_operands(src: _Source, max_nodes: int) -> None:
+    """Refuse a text of more than ``max_nodes`` operands and operations before Python's
+    parser sees it (parsing 400 kB of bracketed products takes it a second or more).
+    Each run of :data:`_NODE` is at least one node of the tree that
+    :meth:`_Parser.validate` counts, so their number bounds that count from below for
+    every valid expression (only forms refused anyway, strings and keywords, can count
+    more); the message is ``validate``'s."""
+    count = text_nodes(src.text)
+    if count > max_nodes:
+        raise src.error(
+            f"expression too large: more than {max_nodes} operands and operations"
+            f" (limit max_nodes={max_nodes}; at least {count} in its text)"
+        )
+
+
 def _check_characters(src: _Source) -> None:
     """Refuse the characters Python would drop or reinterpret, and those of no expression.
 

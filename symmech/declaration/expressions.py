@@ -76,6 +76,7 @@ from symmech.declaration.expression_rules import (
     MAX_NODES,
     _check_brackets,
     _check_characters,
+    _check_operands,
     _joined,
     _number_to_sympy,
     _Source,
@@ -166,6 +167,7 @@ def parse_expression(
     if not src.text.strip():
         raise src.error("empty expression")
     _check_brackets(src, max_depth)
+    _check_operands(src, max_nodes)
     try:
         with warnings.catch_warnings():
             # "1if x else y" and the like: refused (a SyntaxWarning raised as an error

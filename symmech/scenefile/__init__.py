@@ -95,7 +95,9 @@ Limits, by what reading costs: :data:`MAX_FILE_BYTES` bytes of file, :data:`MAX_
 coordinates or parameters, :data:`MAX_WALLS` walls, :data:`MAX_FILE_NODES` operands and
 operations and :data:`MAX_FILE_CALLS` distinct function applications in all the
 expressions together (an entry may be as long as the file allows: an imported model's
-forcing is), integers of at most :data:`~symmech.declaration.expressions.MAX_DIGITS`
+forcing is; each is charged the nodes it parses or builds, whichever is more, and a text
+with more names, numbers and operators than are left is refused before it is parsed),
+integers of at most :data:`~symmech.declaration.expressions.MAX_DIGITS`
 digits; each expression has the parser's limits on depth and exponent size.
 
 Errors raise :class:`SceneFileError` (a :class:`~symmech.SceneError`) listing every problem,

@@ -20,10 +20,13 @@ MAX_NAMES = 200
 #: Largest number of walls.
 MAX_WALLS = 100
 #: Largest number of operands, operations and calls in all the expressions of a file
-#: together (the parser's nodes; each expression may use what the others left).  The
-#: cost of reading a file grows with it, not with the length of one entry: the imported
-#: Whipple bicycle holds about 63,000 (forcing entries of 53,000 characters); a file of
-#: MAX_FILE_BYTES holds at most about 500,000.
+#: together (the parser's nodes; each expression may use what the others left, and is
+#: charged the nodes it parsed or built, whichever is more: ``y + y + ... + y`` parses to
+#: many and builds few).  A text with more names, numbers and operators than are left is
+#: refused before Python's parser sees it.  The cost of reading a file grows with this
+#: count, not with the length of one entry: the imported Whipple bicycle is charged about
+#: 76,000 (63,000 built; forcing entries of 53,000 characters); a file of MAX_FILE_BYTES
+#: holds at most about 500,000.
 MAX_FILE_NODES = 200_000
 #: Largest number of distinct function applications (``sin(x*3)``, as written) in all the
 #: expressions of a file together.  Building one costs sympy up to milliseconds (a

@@ -9,6 +9,7 @@ from typing import Any
 
 import sympy as sp
 
+from symmech.declaration.expression_rules import text_nodes
 from symmech.declaration.expressions import (
     ALLOWED_CONSTANTS,
     ALLOWED_FUNCTIONS,
@@ -261,7 +262,9 @@ class _LoaderBase:
                 self.problems.expression_error(exc, field)
             return None
         self.used |= expr.free_symbols
-        self.nodes_left -= tree_size(expr)
+        # what reading it cost: the nodes parsed (an entry such as y + y + ... + y parses
+        # to many and builds few), or built, whichever is more
+        self.nodes_left -= max(tree_size(expr), text_nodes(value))
         return expr
 
     def _over_budget(self, message: str, field: str, line: int | None) -> None:

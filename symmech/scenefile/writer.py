@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping, Sequence
+from contextvars import ContextVar
 from pathlib import Path
 from typing import Any
 
@@ -13,6 +14,7 @@ from sympy.core.function import AppliedUndef
 from sympy.printing.str import StrPrinter
 
 from symmech.declaration.drawing import SHAPES, Drawing
+from symmech.declaration.expression_rules import text_nodes
 from symmech.declaration.expressions import (
     parse_expression,
     to_expression,
@@ -62,6 +64,11 @@ class _FilePrinter(StrPrinter):
         return super()._print_Function(expr)
 
 
+#: the nodes the reader will charge each expression string of the file being written
+#: (:data:`symmech.scenefile.MAX_FILE_NODES`), collected by :func:`_print_expression`
+_CHARGES: ContextVar[list[int] | None] = ContextVar("_CHARGES", default=None)
+
+
 def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -> str:
     expr = sp.sympify(expr, strict=True)
     for fn, rewrite in _REWRITES.items():
@@ -82,6 +89,9 @@ def _print_expression(expr: sp.Expr, where: str, table: Mapping[str, sp.Expr]) -
         raise SceneFileError(
             [f"{where}: {_short(expr, 60)} does not read back as itself (as {text!r})"]
         )
+    charges = _CHARGES.get()
+    if charges is not None:  # what the reader charges it: the nodes parsed or built
+        charges.append(max(tree_size(back), text_nodes(text)))
     return text
 
 
@@ -201,6 +211,23 @@ def dump_scene(
     distinct coordinates and t, such as ``V(x + y)``: the format declares a function by
     its argument names only).
     """
+    charges: list[int] = []
+    token = _CHARGES.set(charges)
+    try:
+        text = _dump(scene, defaults, description, functions)
+    finally:
+        _CHARGES.reset(token)
+    _check_readable(text, sum(charges))
+    return text
+
+
+def _dump(
+    scene: Scene,
+    defaults: Mapping[sp.Symbol | str, object] | None,
+    description: str,
+    functions: Mapping[str, sp.Expr] | None,
+) -> str:
+    """The text of :func:`dump_scene`, its cost not yet checked."""
     decl = scene.declaration
     q, v = decl.coordinates, decl.velocities
     defaults = dict(defaults or {})
@@ -340,9 +367,7 @@ def dump_scene(
             lines.append("velocity = [" + ", ".join(comps) + "]")
     if decl.drawing is not None:
         lines.extend(_drawing_toml(decl.drawing, table))
-    text = "\n".join(lines) + "\n"
-    _check_readable(text, decl.expressions())
-    return text
+    return "\n".join(lines) + "\n"
 
 
 def _drawing_toml(drawing: Drawing, table: Mapping[str, sp.Expr]) -> list[str]:
@@ -373,11 +398,11 @@ def _drawing_toml(drawing: Drawing, table: Mapping[str, sp.Expr]) -> list[str]:
     return lines
 
 
-def _check_readable(text: str, exprs: Sequence[sp.Expr]) -> None:
+def _check_readable(text: str, nodes: int) -> None:
     """Refuse to write what the reader would refuse by its cost limits (the file's bytes,
-    nodes and distinct function applications: :mod:`symmech.scenefile.format`)."""
+    the ``nodes`` its expression strings are charged, and its distinct function
+    applications: :mod:`symmech.scenefile.format`)."""
     size = len(text.encode("utf-8"))
-    nodes = sum(tree_size(sp.sympify(e, strict=True)) for e in exprs)
     calls = len(applications(text))
     over = [
         f"{what} {value} (limit {name}={limit})"
