@@ -60,6 +60,17 @@ class BoundModule:
             return self.module.call(name, *state, params=self.params, t=t, inputs=inputs)
         return fn(*state, t=t, inputs=inputs)
 
+    def plain(self, name: str) -> Callable[..., list | None] | None:
+        """``name`` at the bound parameters over plain lists of floats, one state (its
+        state arrays as lists), returning its output as a flat list, or None where the
+        evaluation fails or is not finite (then call the attribute, which explains); None
+        when the module has no such variant (a C module, a function of t or the inputs).
+        A loop that converts a state once and calls several functions on it skips the
+        per-call conversions of the attribute."""
+        fast = self.module._fast.get(name)
+        make = getattr(fast, "plain", None)
+        return None if make is None else make(self.params)
+
     def __getattr__(self, name: str):
         # only reached for a name that is not an attribute: say what there is
         module = self.__dict__.get("module")

@@ -186,7 +186,26 @@ def numpy_fast(
 
         return bound
 
+    def plain(params: np.ndarray | None) -> Callable[..., list | None] | None:
+        """The one-state function over plain lists of floats (the state arrays as lists,
+        each of its length) at parameters already checked: its output as a flat list, or
+        None when the evaluation fails or is not finite (the general path explains).  For
+        a loop of its own that converts a state once and calls several functions on it."""
+        if not spec.one_state_fast or (params is not None and params.ndim != 1):
+            return None
+        p = [params.tolist()] if spec.takes_parameters and params is not None else []
+
+        def call(*values: list) -> list | None:
+            try:
+                out = one(*values, *p)
+            except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+                return None
+            return out if isfinite(sum(out)) else None
+
+        return call
+
     fast.bind = bind  # type: ignore[attr-defined]
+    fast.plain = plain  # type: ignore[attr-defined]
     return fast
 
 

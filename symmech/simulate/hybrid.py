@@ -66,7 +66,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from symmech.codegen.module import NumericalError
-from symmech.simulate.events import find_root
+from symmech.simulate.detection import StepSearch
 from symmech.simulate.flow import FlowFailure, Segment
 from symmech.simulate.impulses import MAX_SIMULTANEOUS, active_set_solution, solve_small
 from symmech.simulate.result import Event, SimulationResult
@@ -259,147 +259,9 @@ class _Run:
 
     # -- events -----------------------------------------------------------------------------
     def detect(self, seg: Segment) -> tuple[float, np.ndarray, int, str] | None:
-        """The earliest event inside ``seg``: (time, state, wall, "wall" | "release")."""
-        funcs: list[tuple[int, str]] = []
-        for w in range(self.walls):
-            if w not in self.mode:
-                funcs.append((w, "wall"))
-        funcs.extend((w, "release") for w in self.mode)
-        if not funcs:
-            return None
-
-        t0 = seg.t0
-        # A wall touched at the start of the step and left (psi(t0) ~ 0, d psi/dt > 0):
-        # psi(t0) is a root of psi itself, so search the divided gap psi(t)/(t - t0),
-        # whose value at t0 is the normal rate.  A wall touched and approached is searched
-        # through psi itself.  A start inside a wall (psi(t0) < 0, unless the body grazed
-        # it and has not left it since) counts as psi(t0) = 0: a further dip is an event
-        # at once, never a tunnel.
-        divided: list[bool] = []
-        start: list[float | None] = []
-        for w, what in funcs:
-            if what != "wall":
-                divided.append(False)
-                start.append(None)
-                continue
-            psi0 = self.f.psi(w, t0, self.q(seg.y0))
-            rate0 = self.f.normal_rate(w, t0, seg.y0) if abs(psi0) <= self.tol_psi else None
-            g0 = psi0 + self.tol_psi if w in self.banded else psi0
-            divided.append(
-                w not in self.banded and rate0 is not None and rate0 > 0 and w not in self.grazing
-            )
-            if w in self.grazing:  # grazed, not left since: counts as inside until it leaves
-                start.append(0 * psi0 - 1)
-            elif divided[-1]:
-                start.append(rate0)
-            elif g0 < 0:
-                start.append(0 * g0)
-            else:
-                start.append(g0)
-        band = [what == "wall" and w in self.banded for w, what in funcs]
-
-        def value(i: int, t: float, y: np.ndarray) -> float:
-            w, what = funcs[i]
-            if what == "release":
-                return self.f.normal_force(w, t, self.q(y), self.v(y), self.mode)
-            psi = self.f.psi(w, t, self.q(y))
-            if band[i]:
-                psi = psi + self.tol_psi
-            return psi / (t - t0) if divided[i] else psi
-
-        def start_value(i: int) -> float:
-            s = start[i]
-            return value(i, t0, seg.y0) if s is None else s
-
-        self._event_values = [(lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))]
-
-        def crossed(i: int, a: float, b: float) -> bool:
-            return (a > 0 >= b) if funcs[i][1] == "release" else (a >= 0 > b)
-
-        def state(t: float) -> np.ndarray:
-            return seg.y0 if t == t0 else seg.y1 if t == seg.t1 else seg.dense(t)
-
-        K = self.o.samples
-        times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
-        # on a step a few ulps long the samples round onto each other: keep distinct times
-        times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
-        vals = [[start_value(i) for i in range(len(funcs))]]
-        for k in range(1, len(times)):
-            tk = times[k]
-            vals.append([value(i, tk, state(tk)) for i in range(len(funcs))])
-            brackets: list[tuple[int, float, float, float, float]] = []
-            for i in range(len(funcs)):
-                a, b = vals[k - 1][i], vals[k][i]
-                if crossed(i, a, b):
-                    brackets.append((i, times[k - 1], tk, a, b))
-                elif k >= 2 and funcs[i][1] == "wall":
-                    dip = self._dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
-                    if dip is not None:
-                        tv = dip
-                        gv = value(i, tv, state(tv))
-                        if gv < 0:
-                            lo = times[k - 2] if tv < times[k - 1] else times[k - 1]
-                            glo = vals[k - 2][i] if tv < times[k - 1] else vals[k - 1][i]
-                            brackets.append((i, lo, tv, glo, gv))
-            if brackets:
-                best: tuple[float, np.ndarray, int, str] | None = None
-                for i, lo, hi, glo, ghi in brackets:
-
-                    def g(t: float, i: int = i) -> float:
-                        return value(i, t, seg.dense(t))
-
-                    if ghi == 0:  # a contact force reaching exactly zero at the sample
-                        a = hi
-                    else:
-                        bracket = find_root(
-                            g, lo, hi, glo, ghi, self.f.eps, time_scale=self.time_scale
-                        )
-                        a = self.polish(seg, i, *bracket)
-                    if best is None or a < best[0]:
-                        best = (a, state(a), *funcs[i])
-                return best
-        return None
-
-    def polish(self, seg: Segment, i: int, a: Any, b: Any, ga: Any, gb: Any) -> Any:
-        """The event time found on the step's continuous output; where the step can
-        recompute its state to full order at any time (``seg.refine``, the mpmath
-        reference), the root of the gap is polished on that by the secant method, keeping
-        the admissible side."""
-        refine = getattr(seg, "refine", None)
-        if refine is None:
-            return a
-        g = self._event_values[i]
-        fa = g(a, refine(a))
-        fb = g(b, refine(b))
-        for _ in range(8):
-            if fa == fb:
-                break
-            c = b - fb * (b - a) / (fb - fa)
-            fc = g(c, refine(c))
-            a, fa, b, fb = b, fb, c, fc
-            if abs(b - a) <= 4 * self.f.eps * max(abs(b), self.time_scale):
-                break
-        lo = min(a, b)
-        step = 4 * self.f.eps * max(abs(lo), self.time_scale)
-        return lo if g(lo, refine(lo)) >= 0 else lo - step
-
-    @staticmethod
-    def _dip(ts: list[float], gs: list[float]) -> float | None:
-        """The vertex of the parabola through three non-negative samples of a gap, when it
-        lies inside their span and below zero (a dip between samples), else None."""
-        (t0, t1, t2), (g0, g1, g2) = ts, gs
-        if min(g0, g1, g2) < 0 or g1 > min(g0, g2):
-            return None
-        d01 = (g1 - g0) / (t1 - t0)
-        d12 = (g2 - g1) / (t2 - t1)
-        curv = (d12 - d01) / (t2 - t0)
-        if curv <= 0:
-            return None
-        tv = 0.5 * (t0 + t1) - d01 / (2 * curv)
-        if not t0 < tv < t2:
-            return None
-        gv = g1 + d01 * (tv - t1) + curv * (tv - t0) * (tv - t1)
-        return tv if gv < 0 else None
+        """The earliest event inside ``seg``: (time, state, wall, "wall" | "release")
+        (:class:`~symmech.simulate.detection.StepSearch`)."""
+        return StepSearch(self, seg).earliest()
 
     def at_wall(self, wall: int) -> None:
         """Resolve the contact with ``wall`` reached at (self.t, self.y)."""
