@@ -128,7 +128,8 @@ class StepSearch:
             a, b = vals[k - 1][i], vals[k][i]
             if self._crossed(i, a, b):
                 out.append((i, times[k - 1], times[k], a, b))
-            elif k >= 2 and self.funcs[i][1] == "wall":
+            elif k >= 2 and a <= b and a <= vals[k - 2][i] and self.funcs[i][1] == "wall":
+                # a local minimum at sample k - 1 (parabola_dip's own first test)
                 tv = parabola_dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
                 if tv is not None:
                     gv = self.value(i, tv, self.state(tv))

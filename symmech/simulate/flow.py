@@ -26,6 +26,9 @@ __all__ = ["AugmentedFlow", "FlowFailure", "RKFlow", "ScipyFlow", "Segment"]
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 
+#: float64's unit roundoff (looked up once: the step loop reads it every step)
+_EPS = float(np.finfo(float).eps)
+
 
 class FlowFailure(RuntimeError):
     """The integrator cannot continue (step size underflow, non-finite state)."""
@@ -130,7 +133,7 @@ class RKFlow:
         left = self.t_bound - t
         if left <= 0:
             raise FlowFailure("advance past t_bound")
-        eps = np.finfo(float).eps
+        eps = _EPS
         while True:
             assert self.h is not None
             h = min(self.h, self.max_step, left)
@@ -256,7 +259,7 @@ class ScipyFlow:
         # the loops' rule (RKFlow.advance): a step the controller wants at the resolution
         # of t is a failure (SciPy would step by ulps of t, far from t = 0, and take a
         # wall for a contact it cannot resolve)
-        eps = float(np.finfo(float).eps)
+        eps = _EPS
         floor = 8 * eps * max(abs(t0), eps * min(1.0, abs(self.t_bound)))
         wanted = getattr(s, "h_abs", None)
         if wanted is not None and wanted < self.t_bound - t0 and wanted <= floor:

@@ -169,7 +169,7 @@ class _Run:
 
     def speed(self, y: np.ndarray) -> float:
         """``|v|_inf``, the scale of the velocity tolerances below."""
-        return max((abs(x) for x in self.v(y)), default=0)
+        return max(map(abs, self.v(y).tolist()), default=0)
 
     def tol_v(self, y: np.ndarray) -> float:
         return self.o.atol + self.o.rtol * self.speed(y)
@@ -245,7 +245,7 @@ class _Run:
         tolerance is rest, and one lower than the arithmetic's resolution of q cannot be
         resolved at all (its events would stall, not decay)."""
         acc = abs(self._free_psi_acceleration(wall, y))
-        q_max = max((abs(x) for x in self.q(y)), default=0)
+        q_max = max(map(abs, self.q(y).tolist()), default=0)
         resolution = max(self.o.atol, 16 * self.f.eps * q_max)
         return max(self.o.zeno_factor * self.tol_v(y), (2 * acc * resolution) ** 0.5)
 
