@@ -131,5 +131,5 @@ def test_static_psi_t_fills_out_with_zeros():
 def test_a_failing_state_still_raises_with_out(mod):
     Y, p = _batch(mod)
     Y[3, :] = np.inf
-    with pytest.raises(NumericalError, match="^rhs"):
+    with pytest.raises(NumericalError, match=r"^rhs"):
         mod.rhs(Y, p, out=np.empty((N, 2 * mod.n)))
