@@ -68,7 +68,14 @@ import numpy as np
 from symmech.codegen.module import NumericalError
 from symmech.simulate.detection import StepSearch
 from symmech.simulate.flow import FlowFailure, Segment
-from symmech.simulate.impulses import MAX_SIMULTANEOUS, active_set_solution, solve_small
+from symmech.simulate.impact_sets import (
+    COND_LIMIT,
+    Stop,
+    impact_alone,
+    impact_together,
+    simultaneous_group,
+)
+from symmech.simulate.impulses import solve_small
 from symmech.simulate.result import Event, SimulationResult
 from symmech.simulate.system import SimulationError
 
@@ -82,10 +89,6 @@ MAX_STEPS = 10_000_000
 #: II.4): an event a few ulps after a step's start must not shrink the next step to that
 #: sliver.
 RESTART_FLOOR = 0.2
-
-#: Largest condition number of an impact's Gram matrix the loop accepts: the impulse's
-#: relative error is about cond * eps, so 1e-2 / eps keeps it below 1e-2.
-COND_LIMIT = 1e-2 / 2.220446049250313e-16
 
 
 @dataclass(frozen=True)
@@ -111,12 +114,6 @@ class Flow(Protocol):
     def advance(self) -> Segment: ...
     def limit_step(self, h: float) -> None: ...
     def accept_projection(self, y: np.ndarray) -> None: ...
-
-
-class _Stop(Exception):
-    def __init__(self, status: str, message: str, accumulation: float | None = None):
-        super().__init__(message)
-        self.status, self.message, self.accumulation = status, message, accumulation
 
 
 class _Run:
@@ -213,7 +210,7 @@ class _Run:
             )
         )
         if len(self.events) >= self.o.max_events:
-            raise _Stop(
+            raise Stop(
                 "max_events", f"stopped after {len(self.events)} events at t = {float(self.t)!r}"
             )
 
@@ -295,11 +292,11 @@ class _Run:
         hit: list[int] = []
         wall, r = first, rate
         for _ in range(100 * max(self.walls, 1)):
-            group = self.simultaneous_group()
-            struck = self.impact_together(group) if group else None
+            group = simultaneous_group(self)
+            struck = impact_together(self, group) if group else None
             if struck is None:
                 struck = [wall]
-                self.impact_alone(wall, r)
+                impact_alone(self, wall, r)
             for w in struck:
                 self.history[w].append(self.t)
                 hit.append(w)
@@ -308,100 +305,13 @@ class _Run:
                 break
             wall, r = nxt
         else:
-            raise _Stop(
+            raise Stop(
                 "failed",
                 f"simultaneous impacts at t = {float(self.t)!r} did not resolve in"
                 f" {100 * self.walls} rounds of the impact law",
             )
         self.band_touching()
         self.check_accumulation(list(dict.fromkeys(hit)))
-
-    def check_condition(self, wall: int, q: np.ndarray) -> None:
-        """Stop the run when the impact's Gram matrix is ill-conditioned (COND_LIMIT)."""
-        cond = self.f.impact_condition(wall, self.t, q)
-        self.condition = max(self.condition, cond)
-        if cond > COND_LIMIT:
-            raise _Stop(
-                "failed",
-                f"wall {self.names[wall]!r} is nearly dependent on the constraints at"
-                f" t = {float(self.t)!r}: the impact's Gram matrix has condition number"
-                f" {cond:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
-            )
-
-    def impact_alone(self, wall: int, r: float) -> None:
-        """The scene's closed-form impact map of ``wall`` alone."""
-        y = self.y
-        q, v = self.q(y), self.v(y)
-        self.check_condition(wall, q)
-        v_plus = self.f.impact(wall, self.t, q, v)
-        y_plus = np.concatenate([q, v_plus])
-        if self.mode:  # keep the active contact
-            y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
-        self.event("impact", wall, y, y_plus, r)
-        self.y = y_plus
-
-    def simultaneous_group(self) -> list[tuple[int, float]]:
-        """The walls closed and approaching now (:meth:`approaching_walls`) when the law
-        resolves them together: two or more (or one, while walls are held: it is resolved
-        with them), each with a Newton direction, the held walls too, at most
-        MAX_SIMULTANEOUS in all; else empty (one wall at a time)."""
-        if self.o.impact_law != "simultaneous":
-            return []
-        group = self.approaching_walls()
-        size = len(group) + len(self.mode)
-        if not group or size < 2 or size > MAX_SIMULTANEOUS:
-            return []
-        if not all(self.f.simultaneous[w] for w in [*(w for w, _ in group), *self.mode]):
-            return []
-        return group
-
-    def impact_together(self, group: list[tuple[int, float]]) -> list[int] | None:
-        """Resolve the walls of ``group`` together with the held walls (:mod:`.impulses`:
-        a held wall ``j`` takes an impulse only to keep ``u_j+ >= 0``, its target rate
-        change ``g_j = -u_j-``; its Newton direction is taken from its map at the first
-        approaching wall's direction, the map being linear); the walls of ``group`` that
-        took an impulse, or None when no active set is feasible (then one wall at a
-        time).  Held walls that end up leaving are released."""
-        y = self.y
-        q, v = self.q(y), self.v(y)
-        walls = [w for w, _ in group]
-        for w in walls:
-            self.check_condition(w, q)
-        x, g = [], []
-        for w in walls:
-            d = self.f.impact(w, self.t, q, v) - v
-            gw = self.f.rate_change(w, self.t, q, d)
-            g.append(gw)
-            x.append(d / gw)
-        held = []
-        for j in self.mode:
-            probe = next((xi for xi in x if self.f.rate_change(j, self.t, q, xi) != 0), None)
-            if probe is None:
-                continue  # no approaching wall moves it: it needs no impulse
-            d = self.f.impact(j, self.t, q, probe) - probe
-            held.append(j)
-            x.append(d / self.f.rate_change(j, self.t, q, d))
-            g.append(-self.f.normal_rate(j, self.t, y))
-        K = [[self.f.rate_change(j, self.t, q, xi) for xi in x] for j in walls + held]
-        m = active_set_solution(K, g, self.tol_v(y))
-        if m is None or all(mi == 0 for mi in m[: len(walls)]):
-            return None
-        v_plus = v.copy()
-        for mi, xi in zip(m, x, strict=True):
-            if mi != 0:
-                v_plus = v_plus + mi * xi
-        y_plus = np.concatenate([q, v_plus])
-        if self.mode:
-            y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
-        struck = [w for w, mi in zip(walls, m[: len(walls)], strict=True) if mi != 0]
-        rates = dict(group)
-        for k, w in enumerate(struck):  # the energy change is carried by the first
-            self.event("impact", w, y, y_plus, rates[w], count_energy=k == 0)
-        self.y = y_plus
-        for j, mj in zip(held, m[len(walls) :], strict=True):
-            if mj == 0 and self.f.normal_rate(j, self.t, self.y) > self.tol_v(self.y):
-                self.release(j)
-        return struck
 
     def band_touching(self) -> None:
         """Walls at contact (``|psi| <= tol_psi``) whose normal rate is below the rounding
@@ -470,7 +380,7 @@ class _Run:
                 if self.o.contact == "stop"
                 else "the wall moves (no contact mode for a moving wall)"
             )
-            raise _Stop(
+            raise Stop(
                 "zeno",
                 f"impacts on wall {self.names[wall]!r} accumulate at t* = {float(estimate)!r}"
                 f" (last impact at t = {float(self.t)!r}, rebound speed {float(rebound):.3g});"
@@ -490,7 +400,7 @@ class _Run:
         wall; the first carries the energy change."""
         for wall, _ in walls:
             if self.f.moving[wall] or self.o.contact == "stop":
-                raise _Stop(
+                raise Stop(
                     "zeno",
                     f"the body comes to rest on wall {self.names[wall]!r} at"
                     f" t = {float(self.t)!r} ({reason}); stopped: "
@@ -569,7 +479,7 @@ class _Run:
                 steps = self.flow.stats.steps
                 if steps >= self.o.max_steps:  # the bound on a run's work
                     at = f"at t = {float(self.t)!r}"
-                    raise _Stop("max_steps", f"stopped after {steps} steps {at}")
+                    raise Stop("max_steps", f"stopped after {steps} steps {at}")
                 seg = self.flow.advance()
                 ev = self.detect(seg)
                 if ev is None:
@@ -601,7 +511,7 @@ class _Run:
                 self.record(self.t, self.y)
                 self.flow.limit_step(max(t_e - seg.t0, RESTART_FLOOR * (seg.t1 - seg.t0)))
                 self.flow.start(self.t, self.y, t_end)
-        except _Stop as stop:
+        except Stop as stop:
             return stop.status, stop.message, stop.accumulation
         except FlowFailure as exc:
             return "failed", str(exc), None
