@@ -2,8 +2,9 @@
 
 One run alternates smooth phases and events.  Each accepted step of the flow
 (:mod:`symmech.simulate.flow`) is searched for events before it is accepted
-(:mod:`symmech.simulate.events`): a wall's gap psi turning negative, or, while in contact,
-the normal contact force lambda_N turning negative.  The step is cut at the earliest event
+(:mod:`symmech.simulate.detection`; roots by :mod:`symmech.simulate.events`): a wall's
+gap psi turning negative, or, while in contact, the normal contact force lambda_N turning
+negative.  The step is cut at the earliest event
 (located on the continuous output, reported on the admissible side) and the loop restarts
 the flow from the state the event produces.
 
@@ -285,7 +286,7 @@ class _Run:
 
     def impacts(self, first: int, rate: float) -> None:
         """Impact at ``first`` and every wall closed and approaching with it, resolved
-        together by the generalized Newton law (:mod:`.impulses`; with
+        together by the generalized Newton law (:mod:`.impact_sets`, :mod:`.impulses`; with
         ``impact_law="sequential"``, or a set that holds a wall without a Newton
         direction, one wall at a time, the most negative rate first); then, in cascade,
         the walls that approach as a result."""
