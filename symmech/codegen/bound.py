@@ -53,12 +53,31 @@ class BoundModule:
             if not hasattr(type(self), name):
                 setattr(self, name, fn)
 
-    def call(self, name: str, *state: object, t: object = None, inputs: object = None):
-        """The generated function ``name`` at the bound parameters."""
+    def call(
+        self,
+        name: str,
+        *state: object,
+        t: object = None,
+        inputs: object = None,
+        out: np.ndarray | None = None,
+    ):
+        """The generated function ``name`` at the bound parameters (``out``: as
+        :meth:`SceneModule.call <symmech.codegen.module.SceneModule.call>`)."""
         fn = self._bound.get(name)
         if fn is None:
-            return self.module.call(name, *state, params=self.params, t=t, inputs=inputs)
-        return fn(*state, t=t, inputs=inputs)
+            return self.module.call(name, *state, params=self.params, t=t, inputs=inputs, out=out)
+        return fn(*state, t=t, inputs=inputs, out=out)
+
+    def plain(self, name: str) -> Callable[..., list | None] | None:
+        """``name`` at the bound parameters over plain lists of floats, one state (its
+        state arrays as lists), returning its output as a flat list, or None where the
+        evaluation fails or is not finite (then call the attribute, which explains); None
+        when the module has no such variant (a C module, a function of t or the inputs).
+        A loop that converts a state once and calls several functions on it skips the
+        per-call conversions of the attribute."""
+        fast = self.module._fast.get(name)
+        make = getattr(fast, "plain", None)
+        return None if make is None else make(self.params)
 
     def __getattr__(self, name: str):
         # only reached for a name that is not an attribute: say what there is
@@ -81,8 +100,10 @@ def _bind(module: Any, name: str, p: np.ndarray | None) -> Callable[..., np.ndar
 
     if fast is None:
 
-        def bound(*state: object, t: object = None, inputs: object = None) -> np.ndarray:
-            return general(name, *state, params=p, t=t, inputs=inputs)
+        def bound(
+            *state: object, t: object = None, inputs: object = None, out: object = None
+        ) -> np.ndarray:
+            return general(name, *state, params=p, t=t, inputs=inputs, out=out)
 
     else:
         # the NumPy backend's one-state caller takes the checked parameters once, as
@@ -90,12 +111,14 @@ def _bind(module: Any, name: str, p: np.ndarray | None) -> Callable[..., np.ndar
         binder = getattr(fast, "bind", None)
         one = binder(p) if binder is not None else lambda state: fast(state, p)
 
-        def bound(*state: object, t: object = None, inputs: object = None) -> np.ndarray:
-            if inputs is None and (t is None or type(t) in PLAIN_TIMES):
-                out = one(state)
-                if out is not None:
-                    return out
-            return general(name, *state, params=p, t=t, inputs=inputs)
+        def bound(
+            *state: object, t: object = None, inputs: object = None, out: object = None
+        ) -> np.ndarray:
+            if out is None and inputs is None and (t is None or type(t) in PLAIN_TIMES):
+                value = one(state)
+                if value is not None:
+                    return value
+            return general(name, *state, params=p, t=t, inputs=inputs, out=out)
 
     bound.__name__ = bound.__qualname__ = name
     bound.__doc__ = f"{name} of scene {module.code.scene_name!r} at the bound parameters."

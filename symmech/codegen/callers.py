@@ -24,14 +24,25 @@ from symmech.codegen.plan import CodegenError
 from symmech.codegen.runtime_checks import ParameterRule
 from symmech.errors import SymmechError
 
-__all__ = ["PLAIN_TIMES", "Fast", "NumericalError", "Raw", "c_raw", "numpy_fast", "numpy_raw"]
+__all__ = [
+    "PLAIN_TIMES",
+    "Fast",
+    "NumericalError",
+    "Raw",
+    "c_raw",
+    "check_out",
+    "numpy_fast",
+    "numpy_raw",
+]
 
 _STATUS = {
     1: "a matrix that must be positive definite is not",
     2: "an output, or an input of its linear solve, is not finite",
 }
 
-Raw = Callable[[tuple[np.ndarray, ...], Any, Any, Any], np.ndarray]
+#: A general caller: ``raw(state, p, t, u, out=None)``; ``out``, when given, a checked
+#: (:func:`check_out`) array the output is written into and returned.
+Raw = Callable[..., np.ndarray]
 #: A fast single-state caller: the output, or None when the arguments are not the plain
 #: case it handles (the general path then validates them and explains any problem).
 Fast = Callable[[tuple[object, ...], object], "np.ndarray | None"]
@@ -53,10 +64,30 @@ def _by_name(spec: LoweredFunction, state: Sequence[object], p, t, u) -> list:
     return [given[a] for a in spec.arguments]
 
 
+def check_out(name: str, out: object, shape: tuple[int, ...]) -> np.ndarray:
+    """``out`` when it is an array the output of ``name`` (of shape ``shape``) can be
+    written into: a NumPy array (not a subclass) of float64 in native byte order, of
+    exactly that shape, C-contiguous and writeable; else a CodegenError naming the
+    function, what was expected and what was given."""
+    want = f"{name}: out= must be a C-contiguous, writeable float64 array of shape {shape}"
+    if type(out) is not np.ndarray:
+        raise CodegenError(f"{want}; got {type(out).__name__}")
+    if out.dtype != np.float64:
+        raise CodegenError(f"{want}; got dtype {out.dtype.str} ({out.dtype})")
+    if out.shape != shape:
+        raise CodegenError(f"{want}; got shape {out.shape}")
+    if not out.flags.c_contiguous:
+        raise CodegenError(f"{want}; got a non-contiguous array (strides {out.strides})")
+    if not out.flags.writeable:
+        raise CodegenError(f"{want}; got a read-only array")
+    return out
+
+
 def numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
     shape_out = spec.out_shape
 
-    def call(state, p, t, u):
+    def call(state, p, t, u, out=None):
+        dest = out
         args = _by_name(spec, state, p, t, u)
         try:
             with np.errstate(all="ignore"):
@@ -73,6 +104,9 @@ def numpy_raw(fn: Callable, spec: LoweredFunction) -> Raw:
                 flat = bad.reshape((-1, *shape_out)).reshape(int(np.prod(lead)), -1).any(axis=1)
                 index = int(np.argmax(flat))
             raise _failed(spec.name, index, _STATUS[2])
+        if dest is not None:  # computed whole first: out may alias an input
+            dest[...] = out
+            return dest
         return out
 
     return call
@@ -186,7 +220,26 @@ def numpy_fast(
 
         return bound
 
+    def plain(params: np.ndarray | None) -> Callable[..., list | None] | None:
+        """The one-state function over plain lists of floats (the state arrays as lists,
+        each of its length) at parameters already checked: its output as a flat list, or
+        None when the evaluation fails or is not finite (the general path explains).  For
+        a loop of its own that converts a state once and calls several functions on it."""
+        if not spec.one_state_fast or (params is not None and params.ndim != 1):
+            return None
+        p = [params.tolist()] if spec.takes_parameters and params is not None else []
+
+        def call(*values: list) -> list | None:
+            try:
+                out = one(*values, *p)
+            except (ArithmeticError, ValueError, np.linalg.LinAlgError):
+                return None
+            return out if isfinite(sum(out)) else None
+
+        return call
+
     fast.bind = bind  # type: ignore[attr-defined]
+    fast.plain = plain  # type: ignore[attr-defined]
     return fast
 
 
@@ -278,7 +331,7 @@ def c_raw(
                 raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
             return arrays[-1].reshape(out_shape).copy()
 
-    def call(state, p, t, u):
+    def call(state, p, t, u, out=None):
         if spec.takes_parameters and p.ndim != 1:
             raise CodegenError(
                 f"{spec.name}: the C backend shares one parameter vector across a batch;"
@@ -292,8 +345,11 @@ def c_raw(
         ]
         lead = np.broadcast_shapes(*leads)
         if lead == ():
-            return call_single(values)
-        return _batch(batch, call_single, spec, sizes, values, lead)
+            if out is None:
+                return call_single(values)
+            out[...] = call_single(values)
+            return out
+        return _batch(batch, call_single, spec, sizes, values, lead, out)
 
     return call, fast
 
@@ -305,9 +361,13 @@ def _batch(
     sizes: Sequence[int],
     values: Sequence[Any],
     lead: tuple[int, ...],
+    dest: np.ndarray | None = None,
 ) -> np.ndarray:
     """The batch function over the states of shape ``lead`` (the arguments broadcast and
-    made contiguous, p shared); a failing state is run alone to learn why."""
+    made contiguous, p shared); a failing state is run alone to learn why.  The output is
+    written into ``dest`` (checked by :func:`check_out`) when given, through a fresh array
+    when ``dest`` may share memory with an argument (the generated loop would read states
+    it has overwritten)."""
     names = spec.arguments
     count = int(np.prod(lead))
     per_state = [
@@ -318,7 +378,13 @@ def _batch(
         else np.ascontiguousarray(np.broadcast_to(v, (*lead, k)).reshape(count, k))
         for a, v, k in zip(names, values, sizes, strict=True)
     ]
-    out = np.empty((count, spec.out_size))
+    shared = dest is not None and any(
+        isinstance(a, np.ndarray) and np.may_share_memory(dest, a) for a in per_state
+    )
+    if dest is None or shared:
+        out = np.empty((count, spec.out_size))
+    else:
+        out = dest.reshape(count, spec.out_size)  # a view: dest is C-contiguous
     first = batch(count, *[a.ctypes.data for a in per_state], out.ctypes.data)
     if first:
         i = first - 1
@@ -327,7 +393,11 @@ def _batch(
         except NumericalError as exc:
             raise _failed(spec.name, i, str(exc).split(": ", 1)[1]) from None
         raise _failed(spec.name, i, "failed in the batch call only")
-    return out.reshape((*lead, *spec.out_shape))
+    if dest is None:
+        return out.reshape((*lead, *spec.out_shape))
+    if shared:
+        dest[...] = out.reshape(dest.shape)
+    return dest
 
 
 def _parameters_hold(rules: Sequence[ParameterRule], p: np.ndarray) -> bool:

@@ -29,6 +29,10 @@ its name (``wall="left wall"``; the generated names use the sanitised ``left_wal
 failure at some state (a matrix that must be positive definite is not, or an output is
 not finite) raises :class:`NumericalError`.
 
+Every function but ``projectors`` takes ``out=``: a preallocated, C-contiguous, writeable
+float64 array of exactly the output's shape, which the output is written into and which
+is returned (the C batch writes straight into it; see :meth:`SceneModule.call`).
+
 Every argument is converted to float64 (any byte order, layout or real number type) or
 refused with a :class:`~symmech.codegen.plan.CodegenError` naming it (complex, boolean,
 string, masked, ragged, shapes that do not broadcast); a batch of N = 0 states gives an
@@ -72,6 +76,7 @@ from symmech.codegen.callers import (
     NumericalError,
     Raw,
     c_raw,
+    check_out,
     numpy_fast,
     numpy_raw,
 )
@@ -225,7 +230,9 @@ class SceneModule:
             raise CodegenError(f"{what}: expected shape (..., {size}), got {a.shape}")
         return a
 
-    def _call(self, name: str, state: Sequence[np.ndarray], params, t, inputs) -> np.ndarray:
+    def _call(
+        self, name: str, state: Sequence[np.ndarray], params, t, inputs, out=None
+    ) -> np.ndarray:
         spec = self._spec.get(name)
         if spec is None:
             reasons = [o for o in self.code.omitted if name.split("_")[0] in o]
@@ -251,10 +258,14 @@ class SceneModule:
         if u is not None:
             leads["inputs"] = u.shape[:-1]
         try:
-            np.broadcast_shapes(*leads.values())
+            lead = np.broadcast_shapes(*leads.values())
         except ValueError:
             raise CodegenError(f"{name}: the batch shapes do not broadcast: {leads}") from None
-        return self._raw[name](tuple(state), p, tt, u)
+        if out is None:
+            return self._raw[name](tuple(state), p, tt, u)
+        return self._raw[name](
+            tuple(state), p, tt, u, check_out(name, out, (*lead, *spec.out_shape))
+        )
 
     # -- the API ----------------------------------------------------------------------------
     def call(
@@ -264,10 +275,24 @@ class SceneModule:
         params: Params = None,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
-        """Call the generated function ``name`` with its state arrays (q, v, or y)."""
+        """Call the generated function ``name`` with its state arrays (q, v, or y).
+
+        ``out``: an array the output is written into and returned (a C-contiguous,
+        writeable float64 array of exactly the output's shape, batch axes first; else a
+        CodegenError saying what was expected).  The C batch writes into it directly (no
+        allocation, no first touch of fresh memory); the NumPy module computes the output
+        and copies it in.  ``out`` may be an argument's own memory (``mod.impact(Q, V,
+        out=V)``): the output is then computed aside and copied.  After a NumericalError
+        its contents are unspecified."""
         fast = self._fast.get(name)
-        if fast is not None and inputs is None and (t is None or type(t) in PLAIN_TIMES):
+        if (
+            out is None
+            and fast is not None
+            and inputs is None
+            and (t is None or type(t) in PLAIN_TIMES)
+        ):
             # the plain one-state case (a time given to a function of the state and the
             # parameters only is a real number, as the general path would check)
             out = fast(state, self._listed(params) if type(params) is dict else params)
@@ -282,7 +307,7 @@ class SceneModule:
         ]
         if spec is not None and len(arrays) != len(spec.state):
             raise CodegenError(f"{name} takes {len(spec.state)} state arrays {spec.state}")
-        return self._call(name, arrays, params, t, inputs)
+        return self._call(name, arrays, params, t, inputs, out)
 
     def mass_matrix(
         self,
@@ -291,9 +316,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """g(q) in the velocity basis, shape (..., n, n)."""
-        return self.call("mass_matrix", q, params=params, t=t, inputs=inputs)
+        return self.call("mass_matrix", q, params=params, t=t, inputs=inputs, out=out)
 
     def forcing(
         self,
@@ -303,9 +329,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """f(q, v, t) with g v_dot = f (unconstrained)."""
-        return self.call("forcing", q, v, params=params, t=t, inputs=inputs)
+        return self.call("forcing", q, v, params=params, t=t, inputs=inputs, out=out)
 
     def acceleration(
         self,
@@ -315,9 +342,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """v_dot (constrained if the scene has constraints)."""
-        return self.call("acceleration", q, v, params=params, t=t, inputs=inputs)
+        return self.call("acceleration", q, v, params=params, t=t, inputs=inputs, out=out)
 
     def rhs(
         self,
@@ -326,9 +354,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """(q_dot, v_dot) for y = (q, v)."""
-        return self.call("rhs", y, params=params, t=t, inputs=inputs)
+        return self.call("rhs", y, params=params, t=t, inputs=inputs, out=out)
 
     def energy(
         self,
@@ -338,9 +367,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """T + V."""
-        return self.call("energy", q, v, params=params, t=t, inputs=inputs)
+        return self.call("energy", q, v, params=params, t=t, inputs=inputs, out=out)
 
     def multipliers(
         self,
@@ -350,9 +380,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """The Lagrange multipliers lambda (constrained scenes)."""
-        return self.call("multipliers", q, v, params=params, t=t, inputs=inputs)
+        return self.call("multipliers", q, v, params=params, t=t, inputs=inputs, out=out)
 
     def constraint_residual(
         self,
@@ -362,9 +393,10 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """mu(q) v (constrained scenes)."""
-        return self.call("constraint_residual", q, v, params=params, t=t, inputs=inputs)
+        return self.call("constraint_residual", q, v, params=params, t=t, inputs=inputs, out=out)
 
     def projectors(
         self,
@@ -414,10 +446,11 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """The gap psi(t, q) of a wall (admissible side psi >= 0)."""
         name = self._wall_function("psi", wall)
-        return self.call(name, q, params=params, t=t, inputs=inputs)
+        return self.call(name, q, params=params, t=t, inputs=inputs, out=out)
 
     def dpsi(
         self,
@@ -427,10 +460,11 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """d psi / d q of a wall (coordinates)."""
         name = self._wall_function("dpsi", wall)
-        return self.call(name, q, params=params, t=t, inputs=inputs)
+        return self.call(name, q, params=params, t=t, inputs=inputs, out=out)
 
     def psi_t(
         self,
@@ -440,14 +474,18 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """d psi / d t of a wall (zero for a static wall)."""
         index = self._wall(wall)
         if not self.code.plan.moving_walls[index]:
             q = self._state(q, self.n, "psi_t argument 0")
-            return np.zeros(q.shape[:-1])
+            if out is None:
+                return np.zeros(q.shape[:-1])
+            check_out(f"psi_t of wall {self.walls[index]!r}", out, q.shape[:-1])[...] = 0.0
+            return out
         name = self._wall_function("psi_t", index)
-        return self.call(name, q, params=params, t=t, inputs=inputs)
+        return self.call(name, q, params=params, t=t, inputs=inputs, out=out)
 
     def impact(
         self,
@@ -458,10 +496,11 @@ class SceneModule:
         *,
         t: ArrayLike | None = None,
         inputs: Inputs = None,
+        out: np.ndarray | None = None,
     ) -> np.ndarray:
         """The post-impact velocity v+ at a wall for the pre-impact velocity v."""
         name = self._wall_function("impact", wall)
-        return self.call(name, q, v, params=params, t=t, inputs=inputs)
+        return self.call(name, q, v, params=params, t=t, inputs=inputs, out=out)
 
 
 def input_name(atom: sp.Basic) -> str:

@@ -16,7 +16,7 @@ flow from the new state (``start``), keeping the last accepted step size as a hi
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +26,9 @@ __all__ = ["AugmentedFlow", "FlowFailure", "RKFlow", "ScipyFlow", "Segment"]
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 
+#: float64's unit roundoff (looked up once: the step loop reads it every step)
+_EPS = float(np.finfo(float).eps)
+
 
 class FlowFailure(RuntimeError):
     """The integrator cannot continue (step size underflow, non-finite state)."""
@@ -34,7 +37,8 @@ class FlowFailure(RuntimeError):
 @dataclass
 class Segment:
     """One accepted step from ``t0`` to ``t1``: end states, the derivative at ``t1``, and
-    ``dense(t)`` for t in [t0, t1]."""
+    ``dense(t)`` for t in [t0, t1]; ``many(ts)``, where the flow has it, is ``dense`` at
+    the times ``ts`` at once (rows of an array: the same values, element by element)."""
 
     t0: float
     t1: float
@@ -42,6 +46,22 @@ class Segment:
     y1: np.ndarray
     f1: np.ndarray | None
     dense: Callable[[float], np.ndarray]
+    many: Callable[[Sequence[float]], np.ndarray] | None = None
+
+    def samples(self, times: Sequence[Any]) -> list[np.ndarray]:
+        """The states at ``times`` (in [t0, t1]): ``y0`` at t0, ``y1`` at t1, the
+        continuous output in between (through :attr:`many` where there is one)."""
+        inner = [t for t in times if t != self.t0 and t != self.t1]
+        rows: Any = iter(self.many(inner) if inner and self.many is not None else ())
+        out = []
+        for t in times:
+            if t == self.t0:
+                out.append(self.y0)
+            elif t == self.t1:
+                out.append(self.y1)
+            else:
+                out.append(next(rows) if self.many is not None else self.dense(t))
+        return out
 
 
 @dataclass
@@ -113,7 +133,7 @@ class RKFlow:
         left = self.t_bound - t
         if left <= 0:
             raise FlowFailure("advance past t_bound")
-        eps = np.finfo(float).eps
+        eps = _EPS
         while True:
             assert self.h is not None
             h = min(self.h, self.max_step, left)
@@ -157,7 +177,13 @@ class RKFlow:
         def dense(tt: float, _d: Any = dense_step, _t0: float = t, _h: float = h) -> np.ndarray:
             return _d((tt - _t0) / _h)
 
-        seg = Segment(t, t1, y, st.y, st.f, dense)
+        many = None
+        if hasattr(dense_step, "many"):
+
+            def many(ts: Sequence[float], _d: Any = dense_step, _t0: float = t, _h: float = h):
+                return _d.many((np.asarray(ts, dtype=float) - _t0) / _h)
+
+        seg = Segment(t, t1, y, st.y, st.f, dense, many)
         self.t, self.y, self.fy = t1, st.y, st.f
         return seg
 
@@ -233,7 +259,7 @@ class ScipyFlow:
         # the loops' rule (RKFlow.advance): a step the controller wants at the resolution
         # of t is a failure (SciPy would step by ulps of t, far from t = 0, and take a
         # wall for a contact it cannot resolve)
-        eps = float(np.finfo(float).eps)
+        eps = _EPS
         floor = 8 * eps * max(abs(t0), eps * min(1.0, abs(self.t_bound)))
         wanted = getattr(s, "h_abs", None)
         if wanted is not None and wanted < self.t_bound - t0 and wanted <= floor:
@@ -257,7 +283,13 @@ class ScipyFlow:
         def continuous(tt: float) -> np.ndarray:
             return dense(tt)
 
-        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous)
+        many = None
+        if type(dense).__name__ == "Dop853DenseOutput":  # element by element, as one call
+
+            def many(ts: Sequence[float]) -> np.ndarray:
+                return dense(np.asarray(ts, dtype=float)).T
+
+        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many)
 
     def limit_step(self, h: float) -> None:
         """As :meth:`RKFlow.limit_step` (the next solver's first step)."""
@@ -293,10 +325,13 @@ class AugmentedFlow:
         gaps: Callable[[float, np.ndarray], np.ndarray],
         size: int,
         jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
+        augmented: Rhs | None = None,
     ):
         self.size, self._rhs, self._rates, self._gaps = size, rhs, rates, gaps
         self._jac = jac
-        self.inner = make(self._augmented, None if jac is None else self._augmented_jac)
+        # ``augmented``: the same right-hand side fused (Functions.augmented), else built here
+        f = self._augmented if augmented is None else augmented
+        self.inner = make(f, None if jac is None else self._augmented_jac)
 
     @property
     def stats(self) -> Any:
@@ -339,8 +374,14 @@ class AugmentedFlow:
         def dense(tt: float, _d: Any = seg.dense) -> np.ndarray:
             return _d(tt)[:k]
 
+        many = None
+        if seg.many is not None:
+
+            def many(ts: Sequence[float], _m: Any = seg.many) -> np.ndarray:
+                return _m(ts)[:, :k]
+
         f1 = None if seg.f1 is None else seg.f1[:k]
-        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense)
+        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many)
 
     def limit_step(self, h: float) -> None:
         self.inner.limit_step(h)

@@ -22,6 +22,8 @@ from symmech.simulate.system import (
 
 __all__ = ["Functions"]
 
+_UNSET: Any = object()
+
 
 class Functions:
     """The evaluations the hybrid loop makes, over a :class:`HybridSystem` at fixed
@@ -79,6 +81,9 @@ class Functions:
         self._bound: dict[tuple[Mode, str], tuple[Callable[..., np.ndarray], bool]] = {}
         self._bound_modules: dict[Mode, BoundModule] = {}
         self._walls: dict[tuple[str, int], str] = {}
+        #: mode -> the fused augmented right-hand side (None: the general path)
+        self._kernels: dict[Mode, Callable[[float, np.ndarray], np.ndarray | None] | None] = {}
+        self._gaps: dict[int, Callable[[float, np.ndarray], float]] = {}
 
     # -- plumbing -------------------------------------------------------------------------
     def _module(self, mode: Mode) -> SceneModule | None:
@@ -104,15 +109,34 @@ class Functions:
         if entry is None:
             mod = self._module(mode)
             assert mod is not None
-            bound = self._bound_modules.get(mode)
-            if bound is None:
-                bound = self._bound_modules[mode] = mod.bind(self._pvec(mode))
+            bound = self._bound_module(mode)
             spec = {f.name: f for f in mod.code.functions}.get(name)
             if spec is None:  # not generated: the module's call explains
                 return mod.call(name, *state, params=self._pvec(mode))
             entry = self._bound[key] = (getattr(bound, name), spec.takes_time)
         fn, takes_t = entry
         return fn(*state, t=t) if takes_t else fn(*state)
+
+    def _bound_module(self, mode: Mode) -> BoundModule:
+        bound = self._bound_modules.get(mode)
+        if bound is None:
+            mod = self._module(mode)
+            assert mod is not None
+            bound = self._bound_modules[mode] = mod.bind(self._pvec(mode))
+        return bound
+
+    def _direct(self, mode: Mode, name: str) -> tuple[Any, bool] | None:
+        """The direct one-state caller of ``name`` in ``mode``: ``(plain, True)`` over lists
+        of floats (the NumPy module's, :meth:`BoundModule.plain
+        <symmech.codegen.bound.BoundModule.plain>`), ``(bound, False)`` over arrays (the
+        compiled one); None for a function of t (the general path passes it)."""
+        mod = self._module(mode)
+        spec = None if mod is None else {f.name: f for f in mod.code.functions}.get(name)
+        if spec is None or spec.takes_time or spec.takes_inputs:
+            return None
+        bound = self._bound_module(mode)
+        plain = bound.plain(name)
+        return (plain, True) if plain is not None else (getattr(bound, name), False)
 
     def _wall_name(self, kind: str, wall: int) -> str:
         key = (kind, wall)
@@ -147,6 +171,101 @@ class Functions:
     def gaps(self, t: float, y: np.ndarray) -> np.ndarray:
         """psi_w(t, q) of every wall."""
         return np.array([self.psi(w, t, y[: self.n]) for w in range(self.walls)])
+
+    def augmented(self, t: float, ya: np.ndarray) -> np.ndarray:
+        """``(y_dot, d psi_w/dt of every wall)`` in the current :attr:`mode` at ``ya = (y,
+        gaps)`` (the right-hand side of :class:`~.flow.AugmentedFlow`): :meth:`flow_rhs`
+        and :meth:`flow_rates` concatenated, through the direct callers of the rhs and the
+        gradients where they exist (one conversion of the state; a failure or a
+        non-finite value goes the general way, which gives NaN)."""
+        mode = self.mode
+        kernel = self._kernels.get(mode, _UNSET)
+        if kernel is _UNSET:
+            kernel = self._kernels[mode] = self._augmented_kernel(mode)
+        if kernel is not None:
+            out = kernel(t, ya)
+            if out is not None:
+                return out
+        y = ya[: 2 * self.n]
+        ydot = self.flow_rhs(t, y)
+        return np.concatenate([ydot, self.flow_rates(t, y, ydot)])
+
+    def _augmented_kernel(self, mode: Mode) -> Any:
+        """The fused :meth:`augmented` of ``mode`` (None: the general path only): for
+        static walls, whose rate is ``dpsi q_dot``, when the rhs and every gradient have
+        direct callers of the same kind."""
+        if self.locked(mode) or any(self.moving):
+            return None
+        rhs = self._direct(mode, "rhs")
+        grads = [self._direct(FREE, self._wall_name("dpsi", w)) for w in range(self.walls)]
+        if rhs is None or any(g is None or g[1] != rhs[1] for g in grads):
+            return None
+        n, size = self.n, 2 * self.n
+        f, gs = rhs[0], [g[0] for g in grads]  # type: ignore[index]
+        if rhs[1]:  # plain lists of floats
+
+            def plain(t: float, ya: np.ndarray) -> np.ndarray | None:
+                y = ya.tolist()[:size]
+                out = f(y)
+                if out is None:
+                    return None
+                q = y[:n]
+                for g in gs:
+                    d = g(q)
+                    if d is None:
+                        return None
+                    r = 0.0
+                    for di, qi in zip(d, out, strict=False):
+                        r += di * qi
+                    out.append(r)
+                return np.array(out)
+
+            return plain
+
+        def arrays(t: float, ya: np.ndarray) -> np.ndarray | None:
+            y = ya[:size]
+            try:
+                ydot = f(y)
+                out = np.empty(size + len(gs))
+                out[:size] = ydot
+                q, qdot = y[:n], ydot[:n]
+                for k, g in enumerate(gs):
+                    out[size + k] = np.dot(g(q), qdot)
+            except NumericalError:
+                return None
+            return out
+
+        return arrays
+
+    def gap_function(self, wall: int) -> Callable[[float, np.ndarray], float]:
+        """``(t, q) -> psi`` of ``wall``: :meth:`psi` through its direct caller where
+        there is one (the event search samples it many times a step)."""
+        fn = self._gaps.get(wall)
+        if fn is None:
+            fn = self._gaps[wall] = self._gap_function(wall)
+        return fn
+
+    def _gap_function(self, wall: int) -> Callable[[float, np.ndarray], float]:
+        direct = self._direct(FREE, self._wall_name("psi", wall))
+        psi = self.psi
+        if direct is None:
+            return lambda t, q: psi(wall, t, q)
+        fn, plain = direct
+        if plain:
+
+            def over_lists(t: float, q: np.ndarray) -> float:
+                out = fn(q.tolist())
+                return out[0] if out is not None else psi(wall, t, q)
+
+            return over_lists
+
+        def over_arrays(t: float, q: np.ndarray) -> float:
+            try:
+                return float(fn(q))
+            except NumericalError:
+                return psi(wall, t, q)  # raises as the general path does
+
+        return over_arrays
 
     def jac(self, mode: Mode, t: float, y: np.ndarray) -> np.ndarray:
         """d(y_dot)/dy in the mode (the generated Jacobian; zero in a locked contact)."""

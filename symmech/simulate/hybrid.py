@@ -2,8 +2,9 @@
 
 One run alternates smooth phases and events.  Each accepted step of the flow
 (:mod:`symmech.simulate.flow`) is searched for events before it is accepted
-(:mod:`symmech.simulate.events`): a wall's gap psi turning negative, or, while in contact,
-the normal contact force lambda_N turning negative.  The step is cut at the earliest event
+(:mod:`symmech.simulate.detection`; roots by :mod:`symmech.simulate.events`): a wall's
+gap psi turning negative, or, while in contact, the normal contact force lambda_N turning
+negative.  The step is cut at the earliest event
 (located on the continuous output, reported on the admissible side) and the loop restarts
 the flow from the state the event produces.
 
@@ -66,9 +67,16 @@ from typing import Any, Protocol
 import numpy as np
 
 from symmech.codegen.module import NumericalError
-from symmech.simulate.events import find_root
+from symmech.simulate.detection import StepSearch
 from symmech.simulate.flow import FlowFailure, Segment
-from symmech.simulate.impulses import MAX_SIMULTANEOUS, active_set_solution, solve_small
+from symmech.simulate.impact_sets import (
+    COND_LIMIT,
+    Stop,
+    impact_alone,
+    impact_together,
+    simultaneous_group,
+)
+from symmech.simulate.impulses import solve_small
 from symmech.simulate.result import Event, SimulationResult
 from symmech.simulate.system import SimulationError
 
@@ -82,10 +90,6 @@ MAX_STEPS = 10_000_000
 #: II.4): an event a few ulps after a step's start must not shrink the next step to that
 #: sliver.
 RESTART_FLOOR = 0.2
-
-#: Largest condition number of an impact's Gram matrix the loop accepts: the impulse's
-#: relative error is about cond * eps, so 1e-2 / eps keeps it below 1e-2.
-COND_LIMIT = 1e-2 / 2.220446049250313e-16
 
 
 @dataclass(frozen=True)
@@ -111,12 +115,6 @@ class Flow(Protocol):
     def advance(self) -> Segment: ...
     def limit_step(self, h: float) -> None: ...
     def accept_projection(self, y: np.ndarray) -> None: ...
-
-
-class _Stop(Exception):
-    def __init__(self, status: str, message: str, accumulation: float | None = None):
-        super().__init__(message)
-        self.status, self.message, self.accumulation = status, message, accumulation
 
 
 class _Run:
@@ -169,7 +167,7 @@ class _Run:
 
     def speed(self, y: np.ndarray) -> float:
         """``|v|_inf``, the scale of the velocity tolerances below."""
-        return max((abs(x) for x in self.v(y)), default=0)
+        return max(map(abs, self.v(y).tolist()), default=0)
 
     def tol_v(self, y: np.ndarray) -> float:
         return self.o.atol + self.o.rtol * self.speed(y)
@@ -213,7 +211,7 @@ class _Run:
             )
         )
         if len(self.events) >= self.o.max_events:
-            raise _Stop(
+            raise Stop(
                 "max_events", f"stopped after {len(self.events)} events at t = {float(self.t)!r}"
             )
 
@@ -245,7 +243,7 @@ class _Run:
         tolerance is rest, and one lower than the arithmetic's resolution of q cannot be
         resolved at all (its events would stall, not decay)."""
         acc = abs(self._free_psi_acceleration(wall, y))
-        q_max = max((abs(x) for x in self.q(y)), default=0)
+        q_max = max(map(abs, self.q(y).tolist()), default=0)
         resolution = max(self.o.atol, 16 * self.f.eps * q_max)
         return max(self.o.zeno_factor * self.tol_v(y), (2 * acc * resolution) ** 0.5)
 
@@ -259,147 +257,9 @@ class _Run:
 
     # -- events -----------------------------------------------------------------------------
     def detect(self, seg: Segment) -> tuple[float, np.ndarray, int, str] | None:
-        """The earliest event inside ``seg``: (time, state, wall, "wall" | "release")."""
-        funcs: list[tuple[int, str]] = []
-        for w in range(self.walls):
-            if w not in self.mode:
-                funcs.append((w, "wall"))
-        funcs.extend((w, "release") for w in self.mode)
-        if not funcs:
-            return None
-
-        t0 = seg.t0
-        # A wall touched at the start of the step and left (psi(t0) ~ 0, d psi/dt > 0):
-        # psi(t0) is a root of psi itself, so search the divided gap psi(t)/(t - t0),
-        # whose value at t0 is the normal rate.  A wall touched and approached is searched
-        # through psi itself.  A start inside a wall (psi(t0) < 0, unless the body grazed
-        # it and has not left it since) counts as psi(t0) = 0: a further dip is an event
-        # at once, never a tunnel.
-        divided: list[bool] = []
-        start: list[float | None] = []
-        for w, what in funcs:
-            if what != "wall":
-                divided.append(False)
-                start.append(None)
-                continue
-            psi0 = self.f.psi(w, t0, self.q(seg.y0))
-            rate0 = self.f.normal_rate(w, t0, seg.y0) if abs(psi0) <= self.tol_psi else None
-            g0 = psi0 + self.tol_psi if w in self.banded else psi0
-            divided.append(
-                w not in self.banded and rate0 is not None and rate0 > 0 and w not in self.grazing
-            )
-            if w in self.grazing:  # grazed, not left since: counts as inside until it leaves
-                start.append(0 * psi0 - 1)
-            elif divided[-1]:
-                start.append(rate0)
-            elif g0 < 0:
-                start.append(0 * g0)
-            else:
-                start.append(g0)
-        band = [what == "wall" and w in self.banded for w, what in funcs]
-
-        def value(i: int, t: float, y: np.ndarray) -> float:
-            w, what = funcs[i]
-            if what == "release":
-                return self.f.normal_force(w, t, self.q(y), self.v(y), self.mode)
-            psi = self.f.psi(w, t, self.q(y))
-            if band[i]:
-                psi = psi + self.tol_psi
-            return psi / (t - t0) if divided[i] else psi
-
-        def start_value(i: int) -> float:
-            s = start[i]
-            return value(i, t0, seg.y0) if s is None else s
-
-        self._event_values = [(lambda t, y, i=i: value(i, t, y)) for i in range(len(funcs))]
-
-        def crossed(i: int, a: float, b: float) -> bool:
-            return (a > 0 >= b) if funcs[i][1] == "release" else (a >= 0 > b)
-
-        def state(t: float) -> np.ndarray:
-            return seg.y0 if t == t0 else seg.y1 if t == seg.t1 else seg.dense(t)
-
-        K = self.o.samples
-        times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
-        # on a step a few ulps long the samples round onto each other: keep distinct times
-        times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
-        vals = [[start_value(i) for i in range(len(funcs))]]
-        for k in range(1, len(times)):
-            tk = times[k]
-            vals.append([value(i, tk, state(tk)) for i in range(len(funcs))])
-            brackets: list[tuple[int, float, float, float, float]] = []
-            for i in range(len(funcs)):
-                a, b = vals[k - 1][i], vals[k][i]
-                if crossed(i, a, b):
-                    brackets.append((i, times[k - 1], tk, a, b))
-                elif k >= 2 and funcs[i][1] == "wall":
-                    dip = self._dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
-                    if dip is not None:
-                        tv = dip
-                        gv = value(i, tv, state(tv))
-                        if gv < 0:
-                            lo = times[k - 2] if tv < times[k - 1] else times[k - 1]
-                            glo = vals[k - 2][i] if tv < times[k - 1] else vals[k - 1][i]
-                            brackets.append((i, lo, tv, glo, gv))
-            if brackets:
-                best: tuple[float, np.ndarray, int, str] | None = None
-                for i, lo, hi, glo, ghi in brackets:
-
-                    def g(t: float, i: int = i) -> float:
-                        return value(i, t, seg.dense(t))
-
-                    if ghi == 0:  # a contact force reaching exactly zero at the sample
-                        a = hi
-                    else:
-                        bracket = find_root(
-                            g, lo, hi, glo, ghi, self.f.eps, time_scale=self.time_scale
-                        )
-                        a = self.polish(seg, i, *bracket)
-                    if best is None or a < best[0]:
-                        best = (a, state(a), *funcs[i])
-                return best
-        return None
-
-    def polish(self, seg: Segment, i: int, a: Any, b: Any, ga: Any, gb: Any) -> Any:
-        """The event time found on the step's continuous output; where the step can
-        recompute its state to full order at any time (``seg.refine``, the mpmath
-        reference), the root of the gap is polished on that by the secant method, keeping
-        the admissible side."""
-        refine = getattr(seg, "refine", None)
-        if refine is None:
-            return a
-        g = self._event_values[i]
-        fa = g(a, refine(a))
-        fb = g(b, refine(b))
-        for _ in range(8):
-            if fa == fb:
-                break
-            c = b - fb * (b - a) / (fb - fa)
-            fc = g(c, refine(c))
-            a, fa, b, fb = b, fb, c, fc
-            if abs(b - a) <= 4 * self.f.eps * max(abs(b), self.time_scale):
-                break
-        lo = min(a, b)
-        step = 4 * self.f.eps * max(abs(lo), self.time_scale)
-        return lo if g(lo, refine(lo)) >= 0 else lo - step
-
-    @staticmethod
-    def _dip(ts: list[float], gs: list[float]) -> float | None:
-        """The vertex of the parabola through three non-negative samples of a gap, when it
-        lies inside their span and below zero (a dip between samples), else None."""
-        (t0, t1, t2), (g0, g1, g2) = ts, gs
-        if min(g0, g1, g2) < 0 or g1 > min(g0, g2):
-            return None
-        d01 = (g1 - g0) / (t1 - t0)
-        d12 = (g2 - g1) / (t2 - t1)
-        curv = (d12 - d01) / (t2 - t0)
-        if curv <= 0:
-            return None
-        tv = 0.5 * (t0 + t1) - d01 / (2 * curv)
-        if not t0 < tv < t2:
-            return None
-        gv = g1 + d01 * (tv - t1) + curv * (tv - t0) * (tv - t1)
-        return tv if gv < 0 else None
+        """The earliest event inside ``seg``: (time, state, wall, "wall" | "release")
+        (:class:`~symmech.simulate.detection.StepSearch`)."""
+        return StepSearch(self, seg).earliest()
 
     def at_wall(self, wall: int) -> None:
         """Resolve the contact with ``wall`` reached at (self.t, self.y)."""
@@ -426,18 +286,18 @@ class _Run:
 
     def impacts(self, first: int, rate: float) -> None:
         """Impact at ``first`` and every wall closed and approaching with it, resolved
-        together by the generalized Newton law (:mod:`.impulses`; with
+        together by the generalized Newton law (:mod:`.impact_sets`, :mod:`.impulses`; with
         ``impact_law="sequential"``, or a set that holds a wall without a Newton
         direction, one wall at a time, the most negative rate first); then, in cascade,
         the walls that approach as a result."""
         hit: list[int] = []
         wall, r = first, rate
         for _ in range(100 * max(self.walls, 1)):
-            group = self.simultaneous_group()
-            struck = self.impact_together(group) if group else None
+            group = simultaneous_group(self)
+            struck = impact_together(self, group) if group else None
             if struck is None:
                 struck = [wall]
-                self.impact_alone(wall, r)
+                impact_alone(self, wall, r)
             for w in struck:
                 self.history[w].append(self.t)
                 hit.append(w)
@@ -446,100 +306,13 @@ class _Run:
                 break
             wall, r = nxt
         else:
-            raise _Stop(
+            raise Stop(
                 "failed",
                 f"simultaneous impacts at t = {float(self.t)!r} did not resolve in"
                 f" {100 * self.walls} rounds of the impact law",
             )
         self.band_touching()
         self.check_accumulation(list(dict.fromkeys(hit)))
-
-    def check_condition(self, wall: int, q: np.ndarray) -> None:
-        """Stop the run when the impact's Gram matrix is ill-conditioned (COND_LIMIT)."""
-        cond = self.f.impact_condition(wall, self.t, q)
-        self.condition = max(self.condition, cond)
-        if cond > COND_LIMIT:
-            raise _Stop(
-                "failed",
-                f"wall {self.names[wall]!r} is nearly dependent on the constraints at"
-                f" t = {float(self.t)!r}: the impact's Gram matrix has condition number"
-                f" {cond:.3g} > {COND_LIMIT:.3g} (relative error bound 1e-2)",
-            )
-
-    def impact_alone(self, wall: int, r: float) -> None:
-        """The scene's closed-form impact map of ``wall`` alone."""
-        y = self.y
-        q, v = self.q(y), self.v(y)
-        self.check_condition(wall, q)
-        v_plus = self.f.impact(wall, self.t, q, v)
-        y_plus = np.concatenate([q, v_plus])
-        if self.mode:  # keep the active contact
-            y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
-        self.event("impact", wall, y, y_plus, r)
-        self.y = y_plus
-
-    def simultaneous_group(self) -> list[tuple[int, float]]:
-        """The walls closed and approaching now (:meth:`approaching_walls`) when the law
-        resolves them together: two or more (or one, while walls are held: it is resolved
-        with them), each with a Newton direction, the held walls too, at most
-        MAX_SIMULTANEOUS in all; else empty (one wall at a time)."""
-        if self.o.impact_law != "simultaneous":
-            return []
-        group = self.approaching_walls()
-        size = len(group) + len(self.mode)
-        if not group or size < 2 or size > MAX_SIMULTANEOUS:
-            return []
-        if not all(self.f.simultaneous[w] for w in [*(w for w, _ in group), *self.mode]):
-            return []
-        return group
-
-    def impact_together(self, group: list[tuple[int, float]]) -> list[int] | None:
-        """Resolve the walls of ``group`` together with the held walls (:mod:`.impulses`:
-        a held wall ``j`` takes an impulse only to keep ``u_j+ >= 0``, its target rate
-        change ``g_j = -u_j-``; its Newton direction is taken from its map at the first
-        approaching wall's direction, the map being linear); the walls of ``group`` that
-        took an impulse, or None when no active set is feasible (then one wall at a
-        time).  Held walls that end up leaving are released."""
-        y = self.y
-        q, v = self.q(y), self.v(y)
-        walls = [w for w, _ in group]
-        for w in walls:
-            self.check_condition(w, q)
-        x, g = [], []
-        for w in walls:
-            d = self.f.impact(w, self.t, q, v) - v
-            gw = self.f.rate_change(w, self.t, q, d)
-            g.append(gw)
-            x.append(d / gw)
-        held = []
-        for j in self.mode:
-            probe = next((xi for xi in x if self.f.rate_change(j, self.t, q, xi) != 0), None)
-            if probe is None:
-                continue  # no approaching wall moves it: it needs no impulse
-            d = self.f.impact(j, self.t, q, probe) - probe
-            held.append(j)
-            x.append(d / self.f.rate_change(j, self.t, q, d))
-            g.append(-self.f.normal_rate(j, self.t, y))
-        K = [[self.f.rate_change(j, self.t, q, xi) for xi in x] for j in walls + held]
-        m = active_set_solution(K, g, self.tol_v(y))
-        if m is None or all(mi == 0 for mi in m[: len(walls)]):
-            return None
-        v_plus = v.copy()
-        for mi, xi in zip(m, x, strict=True):
-            if mi != 0:
-                v_plus = v_plus + mi * xi
-        y_plus = np.concatenate([q, v_plus])
-        if self.mode:
-            y_plus[self.n :] = self.f.project(self.mode, self.t, q, v_plus)
-        struck = [w for w, mi in zip(walls, m[: len(walls)], strict=True) if mi != 0]
-        rates = dict(group)
-        for k, w in enumerate(struck):  # the energy change is carried by the first
-            self.event("impact", w, y, y_plus, rates[w], count_energy=k == 0)
-        self.y = y_plus
-        for j, mj in zip(held, m[len(walls) :], strict=True):
-            if mj == 0 and self.f.normal_rate(j, self.t, self.y) > self.tol_v(self.y):
-                self.release(j)
-        return struck
 
     def band_touching(self) -> None:
         """Walls at contact (``|psi| <= tol_psi``) whose normal rate is below the rounding
@@ -608,7 +381,7 @@ class _Run:
                 if self.o.contact == "stop"
                 else "the wall moves (no contact mode for a moving wall)"
             )
-            raise _Stop(
+            raise Stop(
                 "zeno",
                 f"impacts on wall {self.names[wall]!r} accumulate at t* = {float(estimate)!r}"
                 f" (last impact at t = {float(self.t)!r}, rebound speed {float(rebound):.3g});"
@@ -628,7 +401,7 @@ class _Run:
         wall; the first carries the energy change."""
         for wall, _ in walls:
             if self.f.moving[wall] or self.o.contact == "stop":
-                raise _Stop(
+                raise Stop(
                     "zeno",
                     f"the body comes to rest on wall {self.names[wall]!r} at"
                     f" t = {float(self.t)!r} ({reason}); stopped: "
@@ -707,7 +480,7 @@ class _Run:
                 steps = self.flow.stats.steps
                 if steps >= self.o.max_steps:  # the bound on a run's work
                     at = f"at t = {float(self.t)!r}"
-                    raise _Stop("max_steps", f"stopped after {steps} steps {at}")
+                    raise Stop("max_steps", f"stopped after {steps} steps {at}")
                 seg = self.flow.advance()
                 ev = self.detect(seg)
                 if ev is None:
@@ -739,7 +512,7 @@ class _Run:
                 self.record(self.t, self.y)
                 self.flow.limit_step(max(t_e - seg.t0, RESTART_FLOOR * (seg.t1 - seg.t0)))
                 self.flow.start(self.t, self.y, t_end)
-        except _Stop as stop:
+        except Stop as stop:
             return stop.status, stop.message, stop.accumulation
         except FlowFailure as exc:
             return "failed", str(exc), None

@@ -148,6 +148,11 @@ class MpFunctions:
     def gaps(self, t: Any, y: np.ndarray) -> np.ndarray:
         return _mp_array([self.psi(w, t, y[: self.n]) for w in range(self.walls)])
 
+    def gap_function(self, wall: int) -> Callable[[Any, np.ndarray], Any]:
+        """``(t, q) -> psi`` of ``wall`` (as :meth:`Functions.gap_function
+        <symmech.simulate.functions.Functions.gap_function>`)."""
+        return lambda t, q: self.psi(wall, t, q)
+
     def impact(self, wall: int, t: Any, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return self._eval(
             ("impact", wall), lambda: sp.Matrix(self.scene.impact_map(wall).post_velocity), t, q, v

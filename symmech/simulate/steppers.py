@@ -189,6 +189,14 @@ class _PolyDense:
             acc = acc * theta + self._Q[:, k]
         return self._y0 + theta * acc
 
+    def many(self, thetas: np.ndarray) -> np.ndarray:
+        """``self(theta)`` for each theta, as the rows of an array (the same operations)."""
+        s = thetas[:, None]
+        acc = np.broadcast_to(self._Q[:, -1], (len(thetas), self._Q.shape[0]))
+        for k in range(self._Q.shape[1] - 2, -1, -1):
+            acc = acc * s + self._Q[:, k]
+        return self._y0 + s * acc
+
 
 class _HermiteDense:
     """The cubic Hermite interpolant of ``y0, f0, y1, f1`` (order 3)."""
@@ -251,6 +259,17 @@ class _Dop853Dense:
             acc = F[k] + (s1 if k % 2 == 0 else s) * acc
         return self._y0 + s * acc
 
+    def many(self, thetas: np.ndarray) -> np.ndarray:
+        """``self(theta)`` for each theta, as the rows of an array (the same operations)."""
+        if self._F is None:
+            self._F = self._build()
+        F, s = self._F, thetas[:, None]
+        s1 = 1 - s
+        acc: np.ndarray = F[6]
+        for k in range(5, -1, -1):
+            acc = F[k] + (s1 if k % 2 == 0 else s) * acc
+        return self._y0 + s * acc
+
 
 class _RosenbrockDense:
     """``(1 - theta) y0 + theta (y1 + (1 - theta)(k1 + theta k2))`` (HNW II, VI.(4.8))."""
@@ -292,14 +311,18 @@ class ExplicitRK(Stepper):
         arrays = tableau.arrays
         self._c, self._a, self._b = arrays["c"], arrays["a"], arrays["b"]
         self._e, self._P = arrays["e"], arrays["dense"]
+        # the rows of a and the nodes, taken out once (the stage loop runs every step)
+        self._rows = [np.ascontiguousarray(self._a[i, :i]) for i in range(tableau.stages)]
+        self._nodes = [float(c) for c in self._c]
 
     def _stages(self, f, t0, y0, f0, h) -> tuple[np.ndarray, np.ndarray]:
         """Stages ``K_0..K_s`` (``K_s = f(t0 + h, y1)``) and ``y1``."""
         s = self.tableau.stages
         K = np.empty((s + 1, y0.size))
         K[0] = f0
+        rows, nodes = self._rows, self._nodes
         for i in range(1, s):
-            K[i] = _rhs(f, t0 + self._c[i] * h, y0 + h * (self._a[i, :i] @ K[:i]))
+            K[i] = _rhs(f, t0 + nodes[i] * h, y0 + h * (rows[i] @ K[:i]))
         y1 = y0 + h * (self._b @ K[:s])
         K[s] = _rhs(f, t0 + h, y1)
         return K, y1

@@ -1,0 +1,201 @@
+"""The search of one accepted step for its earliest event (the hybrid loop's, :mod:`.hybrid`).
+
+The event functions of a step are the gap psi of every wall not held and, for every wall
+held, its normal contact force lambda_N.  Each is sampled at ``samples - 1`` equally
+spaced interior points of the step and at both ends; the earliest sign change
+(``g >= 0 -> g < 0``, for a force ``g > 0 -> g <= 0``), or a dip of a gap below zero
+between three non-negative samples (the vertex of their parabola), brackets an event,
+which :func:`~symmech.simulate.events.find_root` narrows on the step's continuous output
+(see :mod:`.events` for the rules).
+
+A wall touched at the start of the step and left (``|psi(t0)| <= tol_psi``, normal rate
+> 0) is searched through the divided gap ``psi(t) / (t - t0)``, whose value at t0 is the
+normal rate; a wall released and not yet left (banded) through ``psi + tol_psi``; a start
+inside a wall counts as ``psi(t0) = 0`` (a further dip is an event at once), and a wall
+grazed and not left since as inside it.
+
+The interior samples are evaluated at once where the flow can (:meth:`Segment.samples
+<symmech.simulate.flow.Segment.samples>`) and the gaps through the functions' direct
+one-state callers (:meth:`Functions.gap_function
+<symmech.simulate.functions.Functions.gap_function>`): the same values as one call per
+sample, without its per-call conversions.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from symmech.simulate.events import find_root
+from symmech.simulate.flow import Segment
+
+__all__ = ["StepSearch", "parabola_dip"]
+
+#: An event found in a step: (time, state, wall, "wall" | "release").
+Found = tuple[Any, np.ndarray, int, str]
+
+
+class StepSearch:
+    """The event functions of one step of a run (``run``: the loop's state, read for its
+    functions ``f``, ``mode``, ``walls``, ``tol_psi``, ``banded``, ``grazing``,
+    ``time_scale`` and options ``o``) and their search (:meth:`earliest`)."""
+
+    def __init__(self, run: Any, seg: Segment):
+        self.run, self.seg, self.f = run, seg, run.f
+        mode = run.mode
+        self.funcs: list[tuple[int, str]] = [
+            (w, "wall") for w in range(run.walls) if w not in mode
+        ] + [(w, "release") for w in mode]
+        self.divided: list[bool] = []
+        self.start: list[Any] = []
+        self.band: list[bool] = []
+        self.gaps = [self.f.gap_function(w) if what == "wall" else None for w, what in self.funcs]
+        for (w, what), gap in zip(self.funcs, self.gaps, strict=True):
+            self._prepare(w, what, gap)
+
+    def _prepare(self, w: int, what: str, gap: Any) -> None:
+        """The search rule of event function ``(w, what)`` and its value at t0 (None: to be
+        evaluated)."""
+        run, seg = self.run, self.seg
+        if gap is None:  # a held wall's contact force
+            self.divided.append(False)
+            self.start.append(None)
+            self.band.append(False)
+            return
+        n = run.n
+        psi0 = gap(seg.t0, seg.y0[:n])
+        rate0 = self.f.normal_rate(w, seg.t0, seg.y0) if abs(psi0) <= run.tol_psi else None
+        banded = w in run.banded
+        g0 = psi0 + run.tol_psi if banded else psi0
+        divided = not banded and rate0 is not None and rate0 > 0 and w not in run.grazing
+        self.divided.append(divided)
+        self.band.append(banded)
+        if w in run.grazing:  # grazed, not left since: counts as inside until it leaves
+            self.start.append(0 * psi0 - 1)
+        elif divided:
+            self.start.append(rate0)
+        elif g0 < 0:
+            self.start.append(0 * g0)
+        else:
+            self.start.append(g0)
+
+    def value(self, i: int, t: Any, y: np.ndarray) -> Any:
+        """Event function ``i`` at (t, y)."""
+        w, what = self.funcs[i]
+        run = self.run
+        if what == "release":
+            n = run.n
+            return self.f.normal_force(w, t, y[:n], y[n:], run.mode)
+        gap = self.gaps[i]
+        assert gap is not None
+        psi = gap(t, y[: run.n])
+        if self.band[i]:
+            psi = psi + run.tol_psi
+        return psi / (t - self.seg.t0) if self.divided[i] else psi
+
+    def state(self, t: Any) -> np.ndarray:
+        seg = self.seg
+        return seg.y0 if t == seg.t0 else seg.y1 if t == seg.t1 else seg.dense(t)
+
+    def _crossed(self, i: int, a: Any, b: Any) -> bool:
+        return (a > 0 >= b) if self.funcs[i][1] == "release" else (a >= 0 > b)
+
+    def earliest(self) -> Found | None:
+        """The earliest event inside the step, or None."""
+        if not self.funcs:
+            return None
+        seg, count = self.seg, len(self.funcs)
+        t0, K = seg.t0, self.run.o.samples
+        times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
+        # on a step a few ulps long the samples round onto each other: keep distinct times
+        times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
+        states = seg.samples(times)
+        vals = [[self.value(i, t0, seg.y0) if s is None else s for i, s in enumerate(self.start)]]
+        for k in range(1, len(times)):
+            tk, yk = times[k], states[k]
+            vals.append([self.value(i, tk, yk) for i in range(count)])
+            brackets = self._brackets(times, vals, k)
+            if brackets:
+                return self._locate(brackets)
+        return None
+
+    def _brackets(self, times: list, vals: list, k: int) -> list[tuple[int, Any, Any, Any, Any]]:
+        """The brackets ``(i, lo, hi, g(lo), g(hi))`` of the event functions between
+        samples ``k - 1`` and ``k`` (a sign change, or a gap's dip below zero)."""
+        out = []
+        for i in range(len(self.funcs)):
+            a, b = vals[k - 1][i], vals[k][i]
+            if self._crossed(i, a, b):
+                out.append((i, times[k - 1], times[k], a, b))
+            elif k >= 2 and a <= b and a <= vals[k - 2][i] and self.funcs[i][1] == "wall":
+                # a local minimum at sample k - 1 (parabola_dip's own first test)
+                tv = parabola_dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
+                if tv is not None:
+                    gv = self.value(i, tv, self.state(tv))
+                    if gv < 0:
+                        before = tv < times[k - 1]
+                        lo = times[k - 2] if before else times[k - 1]
+                        glo = vals[k - 2][i] if before else vals[k - 1][i]
+                        out.append((i, lo, tv, glo, gv))
+        return out
+
+    def _locate(self, brackets: list[tuple[int, Any, Any, Any, Any]]) -> Found:
+        """The earliest root over the brackets (each narrowed on the continuous output)."""
+        seg, run = self.seg, self.run
+        best: Found | None = None
+        for i, lo, hi, glo, ghi in brackets:
+
+            def g(t: Any, i: int = i) -> Any:
+                return self.value(i, t, seg.dense(t))
+
+            if ghi == 0:  # a contact force reaching exactly zero at the sample
+                a = hi
+            else:
+                bracket = find_root(g, lo, hi, glo, ghi, self.f.eps, time_scale=run.time_scale)
+                a = self.polish(i, *bracket)
+            if best is None or a < best[0]:
+                best = (a, self.state(a), *self.funcs[i])
+        assert best is not None
+        return best
+
+    def polish(self, i: int, a: Any, b: Any, ga: Any, gb: Any) -> Any:
+        """The event time found on the step's continuous output; where the step can
+        recompute its state to full order at any time (``seg.refine``, the mpmath
+        reference), the root of the gap is polished on that by the secant method, keeping
+        the admissible side."""
+        refine = getattr(self.seg, "refine", None)
+        if refine is None:
+            return a
+        eps, scale = self.f.eps, self.run.time_scale
+        fa = self.value(i, a, refine(a))
+        fb = self.value(i, b, refine(b))
+        for _ in range(8):
+            if fa == fb:
+                break
+            c = b - fb * (b - a) / (fb - fa)
+            fc = self.value(i, c, refine(c))
+            a, fa, b, fb = b, fb, c, fc
+            if abs(b - a) <= 4 * eps * max(abs(b), scale):
+                break
+        lo = min(a, b)
+        step = 4 * eps * max(abs(lo), scale)
+        return lo if self.value(i, lo, refine(lo)) >= 0 else lo - step
+
+
+def parabola_dip(ts: list, gs: list) -> Any:
+    """The vertex of the parabola through three non-negative samples of a gap, when it
+    lies inside their span and below zero (a dip between samples), else None."""
+    (t0, t1, t2), (g0, g1, g2) = ts, gs
+    if min(g0, g1, g2) < 0 or g1 > min(g0, g2):
+        return None
+    d01 = (g1 - g0) / (t1 - t0)
+    d12 = (g2 - g1) / (t2 - t1)
+    curv = (d12 - d01) / (t2 - t0)
+    if curv <= 0:
+        return None
+    tv = 0.5 * (t0 + t1) - d01 / (2 * curv)
+    if not t0 < tv < t2:
+        return None
+    gv = g1 + d01 * (tv - t1) + curv * (tv - t0) * (tv - t1)
+    return tv if gv < 0 else None
