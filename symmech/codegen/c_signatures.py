@@ -35,6 +35,7 @@ def call_arguments(fn: LoweredFunction, n: int, n_inputs: int, stride: int) -> s
     return ", ".join([*out, f"out + i*{stride}"])
 
 
-def scaled_arguments(fn: LoweredFunction, velocity: str) -> str:
-    """The arguments of the unscaled impact map for the scaled velocity ``velocity``."""
-    return ", ".join([*(velocity if a == "v" else a for a in fn.arguments), "out"])
+def scaled_arguments(fn: LoweredFunction, velocity: str, *extra: str) -> str:
+    """The arguments of the unscaled impact map for the scaled velocity ``velocity``
+    (then ``out`` and the ``extra`` arguments: the batch loop's ``pre``)."""
+    return ", ".join([*(velocity if a == "v" else a for a in fn.arguments), "out", *extra])

@@ -1,0 +1,79 @@
+"""The C batch loop (symmech.codegen.batch_split): the lines that read only the parameters
+run once per batch, the rest once per state, with the same doubles and the same failures
+as the one-state function."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from codegen_support import require_c_compiler
+
+import symmech as sm
+from symmech.codegen import NumericalError
+from symmech.codegen.batch_split import _split
+from symmech.examples import carnot_3_13, pendulum_on_cart
+
+
+def test_the_split_hoists_what_reads_only_p_and_keeps_the_order():
+    lines = [
+        "const double p_k = p[1];",
+        "const double v_x = v[0];",
+        "const double a = 1.0/sqrt(p_k*p_k + 1.0e-3);",
+        "const double b = a*v_x;",
+        "if (!(isfinite(a) && isfinite(v[1]))) return SYMMECH_NONFINITE;",
+        "if (!(a > 0.0)) return SYMMECH_NOT_SPD;",
+        "const double c = M_PI*a;",  # a name it does not know: per state
+        "out[0] = b + c;",
+    ]
+    split = _split(lines, {"p"})
+    assert split.once == (lines[0], lines[2])
+    assert split.checks == ("isfinite(a)", "a > 0.0")
+    assert split.fields == ("a",)
+    assert split.state == (
+        lines[1],
+        lines[3],
+        "if (!(isfinite(v[1]))) return SYMMECH_NONFINITE;",
+        lines[6],
+        lines[7],
+    )
+
+
+@pytest.fixture(scope="module", params=["closed_form", "linear_solve"])
+def impact(request):
+    require_c_compiler()
+    code = sm.codegen.generate(carnot_3_13(), "c", strategy=request.param, functions=["impact"])
+    return request.param, code, code.load()
+
+
+def test_the_batch_gives_the_one_state_doubles(impact):
+    strategy, code, mod = impact
+    rng = np.random.default_rng(1)
+    Q, V = rng.uniform(-1, 1, (64, 6)), rng.uniform(-1, 1, (64, 6))
+    V[:8] *= np.array([[1e-300], [1e300], [1e-310], [0.0], [1e-3], [1e3], [-1e200], [1]])
+    p = np.array([0.5, 0.8, 1.2])
+    batch = mod.impact(Q, V, p)
+    single = np.array([mod.impact(q, v, p) for q, v in zip(Q, V, strict=True)])
+    assert np.array_equal(batch, single)
+    if strategy == "linear_solve":
+        (text,) = [t for f, t in code.files.items() if f.endswith(".c")]
+        each = text[text.index("static int sm_each_") : text.index("_batch(long count")]
+        # the Cholesky factor of A M^-1 A^T reads only the parameters: once per batch
+        assert "sqrt(" in text[text.index("static int sm_once_") :] and "sqrt(" not in each
+
+
+def test_a_failing_state_is_found_by_the_batch(impact):
+    _, _, mod = impact
+    Q, V = np.zeros((5, 6)), np.ones((5, 6))
+    V[3, 0] = math.nan
+    with pytest.raises(NumericalError, match="at state 3"):
+        mod.impact(Q, V, np.array([0.5, 0.8, 1.2]))
+
+
+def test_the_rhs_batch_of_the_pendulum_on_a_cart():
+    require_c_compiler()
+    mod = sm.codegen.generate(pendulum_on_cart(2), "c", strategy="linear_solve").load()
+    rng = np.random.default_rng(2)
+    Y, p = 0.3 * rng.normal(size=(9, 6)), 1 + rng.random(len(mod.parameters))
+    assert np.array_equal(mod.rhs(Y, p), np.array([mod.rhs(y, p) for y in Y]))
