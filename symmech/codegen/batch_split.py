@@ -18,7 +18,11 @@ When the state lines store every output entry once and read none back, each stor
 finiteness check of the outputs is made on those locals without a branch per entry:
 ``x - x`` is 0 for a finite ``x`` and NaN otherwise, so the sum of ``sm_out_k - sm_out_k``
 is 0 exactly when every output is finite (``finite``: the lines of that check, or of the
-check that reads ``out`` back when the stores cannot be moved).
+check that reads ``out`` back when the stores cannot be moved).  The impact map of a
+static wall is evaluated for ``w = v 2^-e`` and scaled back by ``2^e`` (``FUNCTION.c.jinja``);
+its per-state body scales the locals back itself, ``(x * u1) * u2``, and checks them once:
+an output that is not finite before the exact scaling by normal powers of two is not
+finite after it, so the one-state function's two checks fail on the same states.
 
 Same operations on the same operands in the same order, so every state gets the doubles
 the one-state function returns, bit for bit.  A failing ``checks`` term fails every state:
@@ -55,6 +59,7 @@ class BatchSplit:
     fields: tuple[str, ...]  # the ``once`` locals the per-state lines read
     state: tuple[str, ...]  # C statements of the per-state body, in order
     finite: tuple[str, ...]  # C statements: return SYMMECH_NONFINITE unless out is finite
+    registers: bool = False  # outputs checked (and scaled back: u1, u2) before the stores
 
     @property
     def hoisted(self) -> bool:
@@ -121,11 +126,13 @@ def _memory_check(size: int) -> tuple[str, ...]:
     return (f"if (sm_check_finite({size}, out) != SYMMECH_OK) return SYMMECH_NONFINITE;",)
 
 
-def _in_registers(state: tuple[str, ...], size: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
+def _in_registers(
+    state: tuple[str, ...], size: int, scaled: bool
+) -> tuple[tuple[str, ...], tuple[str, ...]] | None:
     """``state`` with its output stores moved after its last line through locals, and the
-    branch-free finiteness check of those locals; ``state`` unchanged and the check that
-    reads ``out`` back when some line reads ``out`` or an entry is not stored once."""
-    memory = _memory_check(size)
+    branch-free finiteness check of those locals; with ``scaled``, each output is scaled
+    back by ``(x * u1) * u2`` (the arguments of the per-state function) before it is
+    stored and checked.  None when some line reads ``out`` or an entry is not stored once."""
     lines: list[str] = []
     stored: dict[int, str] = {}
     for line in state:
@@ -135,11 +142,15 @@ def _in_registers(state: tuple[str, ...], size: int) -> tuple[tuple[str, ...], t
             stored[int(store.group(1))] = name
             lines.append(f"const double {name} = {store.group(2)};")
         elif "out" in _names(line) or "sm_out" in line:
-            return state, memory
+            return None
         else:
             lines.append(line)
     if sorted(stored) != list(range(size)) or size == 0:
-        return state, memory
+        return None
+    if scaled:
+        for k in range(size):
+            lines.append(f"const double sm_up_{k} = ({stored[k]} * u1) * u2;")
+            stored[k] = f"sm_up_{k}"
     lines += [f"out[{k}] = {stored[k]};" for k in range(size)]
     total = " + ".join(f"({x} - {x})" for x in stored.values())
     check = (
@@ -163,8 +174,11 @@ def batch_split(fn: LoweredFunction, n: int) -> BatchSplit:
     docstring)."""
     split = _split(_body_lines(fn), {"p"} if fn.takes_parameters else set())
     state: tuple[str, ...] = split.state
-    finite = _memory_check(fn.out_size)
-    if fn.calls is None:  # else the callee stores into out after these lines
-        state, finite = _in_registers(split.state, fn.out_size)
+    # a scaled function's outputs are checked after they are scaled back (a non-finite
+    # one stays non-finite: the factors are normal powers of two)
+    finite = () if fn.scaled else _memory_check(fn.out_size)
+    moved = None if fn.calls else _in_registers(split.state, fn.out_size, fn.scaled)
+    if moved is not None:  # (a callee stores into out after these lines)
+        state, finite = moved
     state = (*_prelude(fn, n, split), *state)
-    return BatchSplit(split.once, split.checks, split.fields, state, finite)
+    return BatchSplit(split.once, split.checks, split.fields, state, finite, moved is not None)

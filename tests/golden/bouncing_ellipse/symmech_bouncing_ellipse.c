@@ -552,7 +552,7 @@ static int sm_once_impact_wall(const double *p, double *pre)
 }
 
 /* impact_wall of one state of the batch, given pre[]: the same doubles as the one-state function. */
-static int sm_each_unscaled_impact_wall(const double *q, const double *v, const double *p, double *out, const double *pre)
+static int sm_each_unscaled_impact_wall(const double *q, const double *v, const double *p, double *out, double u1, double u2, const double *pre)
 {
     (void)q;
     (void)v;
@@ -583,9 +583,14 @@ static int sm_each_unscaled_impact_wall(const double *q, const double *v, const 
     const double sm_out_0 = p_I*tmp10*tmp11 - tmp12*tmp13;
     const double sm_out_1 = v_ydot;
     const double sm_out_2 = p_m*tmp11*tmp13 + tmp10*tmp12;
-    out[0] = sm_out_0;
-    out[1] = sm_out_1;
-    out[2] = sm_out_2;
+    const double sm_up_0 = (sm_out_0 * u1) * u2;
+    const double sm_up_1 = (sm_out_1 * u1) * u2;
+    const double sm_up_2 = (sm_out_2 * u1) * u2;
+    out[0] = sm_up_0;
+    out[1] = sm_up_1;
+    out[2] = sm_up_2;
+    const double sm_nonfinite = (sm_up_0 - sm_up_0) + (sm_up_1 - sm_up_1) + (sm_up_2 - sm_up_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
     return SYMMECH_OK;
 }
 
@@ -608,10 +613,7 @@ static int sm_each_impact_wall(const double *q, const double *v, const double *p
     const double u1 = sm_pow2(e / 2), u2 = sm_pow2(e - e / 2);
     double w[3];
     for (int i = 0; i < 3; ++i) w[i] = (v[i] * d1) * d2;
-    const int status = sm_each_unscaled_impact_wall(q, w, p, out, pre);
-    if (status != SYMMECH_OK) return status;
-    for (int i = 0; i < 3; ++i) out[i] = (out[i] * u1) * u2;
-    return sm_check_finite(3, out);
+    return sm_each_unscaled_impact_wall(q, w, p, out, u1, u2, pre);
 }
 
 long symmech_bouncing_ellipse_impact_wall_batch(long count, const double *q, const double *v, const double *p, double *out)
