@@ -50,8 +50,9 @@ def impact(request):
 def test_the_batch_gives_the_one_state_doubles(impact):
     strategy, code, mod = impact
     rng = np.random.default_rng(1)
-    Q, V = rng.uniform(-1, 1, (64, 6)), rng.uniform(-1, 1, (64, 6))
-    V[:8] *= np.array([[1e-300], [1e300], [1e-310], [0.0], [1e-3], [1e3], [-1e200], [1]])
+    # 150 states: two full blocks of 64 scalings and a part (FUNCTION.c.jinja)
+    Q, V = rng.uniform(-1, 1, (150, 6)), rng.uniform(-1, 1, (150, 6))
+    V[-8:] *= np.array([[1e-300], [1e300], [1e-310], [0.0], [1e-3], [1e3], [-1e200], [1]])
     p = np.array([0.5, 0.8, 1.2])
     batch = mod.impact(Q, V, p)
     single = np.array([mod.impact(q, v, p) for q, v in zip(Q, V, strict=True)])
@@ -65,9 +66,9 @@ def test_the_batch_gives_the_one_state_doubles(impact):
 
 def test_a_failing_state_is_found_by_the_batch(impact):
     _, _, mod = impact
-    Q, V = np.zeros((5, 6)), np.ones((5, 6))
-    V[3, 0] = math.nan
-    with pytest.raises(NumericalError, match="at state 3"):
+    Q, V = np.zeros((150, 6)), np.ones((150, 6))
+    V[100, 0], V[120, 1] = math.nan, math.inf
+    with pytest.raises(NumericalError, match="at state 100"):
         mod.impact(Q, V, np.array([0.5, 0.8, 1.2]))
 
 

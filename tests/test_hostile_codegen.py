@@ -284,7 +284,7 @@ CODE = {
     "hoisted",
     "condition",
     "c_batch_split",
-    "scale_wrapper",  # a macro of the template, whose own outputs are checked here too
+    "scale_down",  # a macro of the template, whose own outputs are checked here too
     "fn.takes_parameters",
     "fn.sizes",
     "fn.parameters",

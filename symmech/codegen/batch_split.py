@@ -59,7 +59,6 @@ class BatchSplit:
     fields: tuple[str, ...]  # the ``once`` locals the per-state lines read
     state: tuple[str, ...]  # C statements of the per-state body, in order
     finite: tuple[str, ...]  # C statements: return SYMMECH_NONFINITE unless out is finite
-    registers: bool = False  # outputs checked (and scaled back: u1, u2) before the stores
 
     @property
     def hoisted(self) -> bool:
@@ -176,9 +175,12 @@ def batch_split(fn: LoweredFunction, n: int) -> BatchSplit:
     state: tuple[str, ...] = split.state
     # a scaled function's outputs are checked after they are scaled back (a non-finite
     # one stays non-finite: the factors are normal powers of two)
-    finite = () if fn.scaled else _memory_check(fn.out_size)
+    finite = _memory_check(fn.out_size)
+    if fn.scaled:
+        back = f"for (int i = 0; i < {fn.out_size}; ++i) out[i] = (out[i] * u1) * u2;"
+        finite = (back, *finite)
     moved = None if fn.calls else _in_registers(split.state, fn.out_size, fn.scaled)
     if moved is not None:  # (a callee stores into out after these lines)
         state, finite = moved
     state = (*_prelude(fn, n, split), *state)
-    return BatchSplit(split.once, split.checks, split.fields, state, finite, moved is not None)
+    return BatchSplit(split.once, split.checks, split.fields, state, finite)
