@@ -39,6 +39,9 @@ linear-algebra step, each operation (including each libm call) counted as one fl
 bound is flops x states / the peak rate of scalar double adds and multiplies of this
 machine, measured in the same run by a C kernel of 12 independent multiply-add chains
 (gcc -O2 -fno-tree-vectorize: the generated batch code evaluates one state at a time).
+The counts are those of the one-state function: the batch evaluates the locals that read
+only the parameters once per batch (``symmech.codegen.batch_split``), so it may do fewer
+operations per state than it is charged.
 C/bound is the measured C batch time over that bound (issue 4 target: <= 3).  A second
 bound counts each libm call of the C function (sin, cos, hypot, ...) at its cost
 measured in the same run (a throughput kernel per function) instead of one flop.  A third

@@ -22,7 +22,9 @@ check that reads ``out`` back when the stores cannot be moved).  The impact map 
 static wall is evaluated for ``w = v 2^-e`` and scaled back by ``2^e`` (``FUNCTION.c.jinja``);
 its per-state body scales the locals back itself, ``(x * u1) * u2``, and checks them once:
 an output that is not finite before the exact scaling by normal powers of two is not
-finite after it, so the one-state function's two checks fail on the same states.
+finite after it, so the one-state function's two checks fail on the same states.  Its
+batch loop runs in blocks of 64 states: the scalings of the block's states first, then
+the states, so that no state waits on one long chain of dependent operations.
 
 Same operations on the same operands in the same order, so every state gets the doubles
 the one-state function returns, bit for bit.  A failing ``checks`` term fails every state:

@@ -41,7 +41,6 @@ def call_arguments(
     return ", ".join([*out, f"out + i*{stride}"])
 
 
-def scaled_arguments(fn: LoweredFunction, velocity: str, *extra: str) -> str:
-    """The arguments of the unscaled impact map for the scaled velocity ``velocity``
-    (then ``out`` and the ``extra`` arguments: the batch loop's ``pre``)."""
-    return ", ".join([*(velocity if a == "v" else a for a in fn.arguments), "out", *extra])
+def scaled_arguments(fn: LoweredFunction, velocity: str) -> str:
+    """The arguments of the unscaled impact map for the scaled velocity ``velocity``."""
+    return ", ".join([*(velocity if a == "v" else a for a in fn.arguments), "out"])
