@@ -4,7 +4,9 @@ as the one-state function."""
 
 from __future__ import annotations
 
+import ctypes
 import math
+import re
 
 import numpy as np
 import pytest
@@ -78,3 +80,20 @@ def test_the_rhs_batch_of_the_pendulum_on_a_cart():
     rng = np.random.default_rng(2)
     Y, p = 0.3 * rng.normal(size=(9, 6)), 1 + rng.random(len(mod.parameters))
     assert np.array_equal(mod.rhs(Y, p), np.array([mod.rhs(y, p) for y in Y]))
+
+
+def test_a_failing_parameter_check_fails_the_first_state(impact):
+    """A check that reads only p runs once per batch: when it fails, every state would
+    fail, and the batch returns 1 (0 for no state), as the loop over states would."""
+    code, mod = impact[1], impact[2]
+    lib = ctypes.CDLL(str(mod.path))
+    (header,) = [t for f, t in code.files.items() if f.endswith(".h")]
+    name = re.search(r"^long (\w+_batch)\(", header, re.M).group(1)
+    batch, one = getattr(lib, name), getattr(lib, name[: -len("_batch")])
+    batch.restype, one.restype = ctypes.c_long, ctypes.c_int
+    Q, V, out = np.zeros((3, 6)), np.ones((3, 6)), np.empty((3, 6))
+    p = np.array([0.5, math.nan, 1.2])  # k: past mod.impact's parameter check
+    ptr = [ctypes.c_void_p(a.ctypes.data) for a in (Q, V, p, out)]
+    assert one(*ptr) == 2  # SYMMECH_NONFINITE
+    assert batch(ctypes.c_long(3), *ptr) == 1
+    assert batch(ctypes.c_long(0), *ptr) == 0
