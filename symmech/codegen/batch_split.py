@@ -47,8 +47,8 @@ __all__ = ["BatchSplit", "batch_split"]
 
 _LET = re.compile(r"^const double (\w+) = (.*);$")
 _CHECK = re.compile(r"^if \(!\((.*)\)\) return (SYMMECH_\w+);$")
-# a name: not part of a number (1.0e-5) or of a longer name, and not a called function
 _STORE = re.compile(r"^out\[(\d+)\] = (.*);$")
+# a name: not part of a number (1.0e-5) or of a longer name, and not a called function
 _NAME = re.compile(r"(?<![\w.])([A-Za-z_]\w*)\b(?!\s*\()")
 
 
