@@ -97,3 +97,25 @@ def test_a_failing_parameter_check_fails_the_first_state(impact):
     assert one(*ptr) == 2  # SYMMECH_NONFINITE
     assert batch(ctypes.c_long(3), *ptr) == 1
     assert batch(ctypes.c_long(0), *ptr) == 0
+
+
+def test_a_body_too_long_to_print_twice_is_not_split(monkeypatch):
+    """Above MAX_SPLIT_CHARACTERS the batch loop calls the exported function per state
+    (the body printed once: the compile time of an imported bicycle is not doubled)."""
+    require_c_compiler()
+    import symmech.codegen.batch_split as batch_split
+
+    scene = pendulum_on_cart(2)
+    split = sm.codegen.generate(scene, "c", functions=["acceleration"])
+    monkeypatch.setattr(batch_split, "MAX_SPLIT_CHARACTERS", 10)
+    plain = sm.codegen.generate(scene, "c", functions=["acceleration"])
+    source = next(v for k, v in plain.files.items() if k.endswith(".c"))
+    assert "sm_each_" not in source and "sm_once_" not in source
+    assert "sm_each_acceleration" in next(v for k, v in split.files.items() if k.endswith(".c"))
+    rng = np.random.default_rng(3)
+    Q, V = rng.uniform(-1, 1, (20, 3)), rng.uniform(-1, 1, (20, 3))
+    p = rng.uniform(0.5, 1.5, len(plain.plan.parameters))
+    a, b = split.load(), plain.load()
+    np.testing.assert_array_equal(a.acceleration(Q, V, p), b.acceleration(Q, V, p))
+    single = np.array([b.acceleration(q, v, p) for q, v in zip(Q, V, strict=True)])
+    np.testing.assert_array_equal(b.acceleration(Q, V, p), single)

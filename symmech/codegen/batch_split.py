@@ -33,6 +33,10 @@ a failure returns early), so the batch returns 1 (the first state) as the loop w
 The split is conservative: a name it does not know (a state array, ``t``, ``u``, a
 macro) makes its line a ``state`` line.  The exported one-state function keeps the
 whole body; the batch loop calls a ``static`` per-state function the compiler can inline.
+The body is so printed twice, which doubles its compile time: a body longer than
+:data:`MAX_SPLIT_CHARACTERS` (an imported bicycle's forcing, where the batch gains
+little against the work of each state) is not split, and its batch loop calls the
+exported function for each state.
 """
 
 from __future__ import annotations
@@ -43,7 +47,12 @@ from dataclasses import dataclass
 
 from symmech.codegen.lower import LoweredFunction
 
-__all__ = ["BatchSplit", "batch_split"]
+__all__ = ["MAX_SPLIT_CHARACTERS", "BatchSplit", "batch_split"]
+
+#: The longest one-state body (characters of its printed lines) that the batch loop
+#: prints a second time, split (module docstring); the 8-link pendulum on a cart's
+#: acceleration has 15,000, an imported bicycle's forcing several 100,000.
+MAX_SPLIT_CHARACTERS = 50_000
 
 _LET = re.compile(r"^const double (\w+) = (.*);$")
 _CHECK = re.compile(r"^if \(!\((.*)\)\) return (SYMMECH_\w+);$")
@@ -170,10 +179,13 @@ def _prelude(fn: LoweredFunction, n: int, split: BatchSplit) -> list[str]:
     return lines + [f"const double {x} = pre[{i}];" for i, x in enumerate(split.fields)]
 
 
-def batch_split(fn: LoweredFunction, n: int) -> BatchSplit:
+def batch_split(fn: LoweredFunction, n: int) -> BatchSplit | None:
     """The split of ``fn``'s C body for its batch loop (``n`` coordinates; see the module
-    docstring)."""
-    split = _split(_body_lines(fn), {"p"} if fn.takes_parameters else set())
+    docstring), or None for a body longer than :data:`MAX_SPLIT_CHARACTERS`."""
+    lines = _body_lines(fn)
+    if sum(len(line) for line in lines) > MAX_SPLIT_CHARACTERS:
+        return None
+    split = _split(lines, {"p"} if fn.takes_parameters else set())
     state: tuple[str, ...] = split.state
     # a scaled function's outputs are checked after they are scaled back (a non-finite
     # one stays non-finite: the factors are normal powers of two)
