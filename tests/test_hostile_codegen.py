@@ -279,6 +279,13 @@ CODE = {
     "fn.name",
     "fn.scaled",
     "velocity",  # a macro argument: "v" or "w"
+    "arguments",  # a macro argument: a C argument list from c_signatures
+    "split",  # symmech.codegen.batch_split: lines of the one-state body, re-ordered
+    "hoisted",
+    "condition",
+    "c_batch_split",
+    "scale_down",  # a macro of the template, whose own outputs are checked here too
+    "fn.takes_parameters",
     "fn.sizes",
     "fn.parameters",
     "fn.dims",

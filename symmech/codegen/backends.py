@@ -31,6 +31,7 @@ import jinja2.meta
 import sympy as sp
 
 from symmech.codegen import c_signatures
+from symmech.codegen.batch_split import batch_split
 from symmech.codegen.dialects import CDialect, Dialect, NumPyDialect, ScalarDialect
 from symmech.codegen.escape import c_comment, c_string, python_comment, python_docstring
 from symmech.codegen.printers import SymmechCPrinter, SymmechMathPrinter, SymmechNumPyPrinter
@@ -165,6 +166,7 @@ def environment() -> jinja2.Environment:
         c_batch_parameters=c_signatures.batch_parameters,
         c_call_arguments=c_signatures.call_arguments,
         c_scaled_arguments=c_signatures.scaled_arguments,
+        c_batch_split=batch_split,
     )
     return env
 

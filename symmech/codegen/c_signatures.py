@@ -27,11 +27,17 @@ def batch_parameters(fn: LoweredFunction) -> str:
     return ", ".join(["long count", *out, "double *out"])
 
 
-def call_arguments(fn: LoweredFunction, n: int, n_inputs: int, stride: int) -> str:
-    """The arguments of the one-state call for state ``i`` of a batch."""
+def call_arguments(
+    fn: LoweredFunction, n: int, n_inputs: int, stride: int, velocity: str = ""
+) -> str:
+    """The arguments of the one-state call for state ``i`` of a batch (``velocity``: the
+    velocity argument in place of ``v + i*n``, the scaled one of a block)."""
     out = []
     for a, size in zip(fn.arguments, fn.argument_sizes(n, 0, n_inputs), strict=True):
-        out.append("t[i]" if a == "t" else "p" if a == "p" else f"{a} + i*{size}")
+        if a == "v" and velocity:
+            out.append(velocity)
+        else:
+            out.append("t[i]" if a == "t" else "p" if a == "p" else f"{a} + i*{size}")
     return ", ".join([*out, f"out + i*{stride}"])
 
 

@@ -66,11 +66,58 @@ int symmech_bouncing_ellipse_mass_matrix(const double *q, const double *p, doubl
     return sm_check_finite(9, out);
 }
 
+/*
+ * mass_matrix for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_mass_matrix(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_I = p[0];
+    const double p_m = p[3];
+    pre[0] = p_I;
+    pre[1] = p_m;
+    return 0;
+}
+
+/* mass_matrix of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_mass_matrix(const double *q, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)p;
+    (void)pre;
+    const double p_I = pre[0];
+    const double p_m = pre[1];
+    const double sm_out_0 = p_m;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    const double sm_out_3 = 0.0;
+    const double sm_out_4 = p_m;
+    const double sm_out_5 = 0.0;
+    const double sm_out_6 = 0.0;
+    const double sm_out_7 = 0.0;
+    const double sm_out_8 = p_I;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    out[3] = sm_out_3;
+    out[4] = sm_out_4;
+    out[5] = sm_out_5;
+    out[6] = sm_out_6;
+    out[7] = sm_out_7;
+    out[8] = sm_out_8;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2) + (sm_out_3 - sm_out_3) + (sm_out_4 - sm_out_4) + (sm_out_5 - sm_out_5) + (sm_out_6 - sm_out_6) + (sm_out_7 - sm_out_7) + (sm_out_8 - sm_out_8);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_mass_matrix_batch(long count, const double *q, const double *p, double *out)
 {
+    double pre[2];
+    if (sm_once_mass_matrix(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_mass_matrix(q + i*3, p, out + i*9);
+        int status = sm_each_mass_matrix(q + i*3, p, out + i*9, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -91,11 +138,27 @@ int symmech_bouncing_ellipse_forcing(const double *q, const double *v, double *o
     return sm_check_finite(3, out);
 }
 
+/* forcing of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_forcing(const double *q, const double *v, double *out)
+{
+    (void)q;
+    (void)v;
+    const double sm_out_0 = 0.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_forcing_batch(long count, const double *q, const double *v, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_forcing(q + i*3, v + i*3, out + i*3);
+        int status = sm_each_forcing(q + i*3, v + i*3, out + i*3);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -116,11 +179,27 @@ int symmech_bouncing_ellipse_acceleration(const double *q, const double *v, doub
     return sm_check_finite(3, out);
 }
 
+/* acceleration of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_acceleration(const double *q, const double *v, double *out)
+{
+    (void)q;
+    (void)v;
+    const double sm_out_0 = 0.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_acceleration_batch(long count, const double *q, const double *v, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_acceleration(q + i*3, v + i*3, out + i*3);
+        int status = sm_each_acceleration(q + i*3, v + i*3, out + i*3);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -147,11 +226,31 @@ int symmech_bouncing_ellipse_rhs(const double *y, double *out)
     return sm_check_finite(6, out);
 }
 
+/* rhs of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_rhs(const double *y, double *out)
+{
+    const double *q = y;
+    const double *v = y + 3;
+    (void)y;
+    (void)q;
+    (void)v;
+    const double v_xdot = v[0];
+    const double v_ydot = v[1];
+    const double v_thetadot = v[2];
+    out[0] = v_xdot;
+    out[1] = v_ydot;
+    out[2] = v_thetadot;
+    int status = symmech_bouncing_ellipse_acceleration(q, v, out + 3);
+    if (status != SYMMECH_OK) return status;
+    if (sm_check_finite(6, out) != SYMMECH_OK) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_rhs_batch(long count, const double *y, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_rhs(y + i*6, out + i*6);
+        int status = sm_each_rhs(y + i*6, out + i*6);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -175,11 +274,47 @@ int symmech_bouncing_ellipse_energy(const double *q, const double *v, const doub
     return sm_check_finite(1, out);
 }
 
+/*
+ * energy for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_energy(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_I = p[0];
+    const double p_m = p[3];
+    const double tmp0 = (0.5)*p_m;
+    pre[0] = p_I;
+    pre[1] = tmp0;
+    return 0;
+}
+
+/* energy of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_energy(const double *q, const double *v, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)pre;
+    const double p_I = pre[0];
+    const double tmp0 = pre[1];
+    const double v_xdot = v[0];
+    const double v_ydot = v[1];
+    const double v_thetadot = v[2];
+    const double sm_out_0 = (0.5)*p_I*(v_thetadot*v_thetadot) + tmp0*(v_xdot*v_xdot) + tmp0*(v_ydot*v_ydot);
+    out[0] = sm_out_0;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_energy_batch(long count, const double *q, const double *v, const double *p, double *out)
 {
+    double pre[2];
+    if (sm_once_energy(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_energy(q + i*3, v + i*3, p, out + i*1);
+        int status = sm_each_energy(q + i*3, v + i*3, p, out + i*1, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -200,11 +335,44 @@ int symmech_bouncing_ellipse_psi_wall(const double *q, const double *p, double *
     return sm_check_finite(1, out);
 }
 
+/*
+ * psi_wall for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_psi_wall(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_a = p[1];
+    const double p_b = p[2];
+    pre[0] = p_a;
+    pre[1] = p_b;
+    return 0;
+}
+
+/* psi_wall of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_psi_wall(const double *q, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)p;
+    (void)pre;
+    const double p_a = pre[0];
+    const double p_b = pre[1];
+    const double q_x = q[0];
+    const double q_theta = q[2];
+    const double sm_out_0 = -q_x - hypot(p_a*cos(q_theta), p_b*sin(q_theta));
+    out[0] = sm_out_0;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_psi_wall_batch(long count, const double *q, const double *p, double *out)
 {
+    double pre[2];
+    if (sm_once_psi_wall(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_psi_wall(q + i*3, p, out + i*1);
+        int status = sm_each_psi_wall(q + i*3, p, out + i*1, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -228,11 +396,49 @@ int symmech_bouncing_ellipse_dpsi_wall(const double *q, const double *p, double 
     return sm_check_finite(3, out);
 }
 
+/*
+ * dpsi_wall for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_dpsi_wall(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_a = p[1];
+    const double p_b = p[2];
+    pre[0] = p_a;
+    pre[1] = p_b;
+    return 0;
+}
+
+/* dpsi_wall of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_dpsi_wall(const double *q, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)p;
+    (void)pre;
+    const double p_a = pre[0];
+    const double p_b = pre[1];
+    const double q_theta = q[2];
+    const double tmp0 = sin(q_theta);
+    const double tmp1 = cos(q_theta);
+    const double sm_out_0 = -1.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = tmp0*tmp1*(p_a - p_b)*(p_a + p_b)/hypot(p_a*tmp1, p_b*tmp0);
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_bouncing_ellipse_dpsi_wall_batch(long count, const double *q, const double *p, double *out)
 {
+    double pre[2];
+    if (sm_once_dpsi_wall(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_dpsi_wall(q + i*3, p, out + i*3);
+        int status = sm_each_dpsi_wall(q + i*3, p, out + i*3, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -310,12 +516,123 @@ int symmech_bouncing_ellipse_impact_wall(const double *q, const double *v, const
     return sm_check_finite(3, out);
 }
 
+/*
+ * impact_wall for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_impact_wall(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_I = p[0];
+    const double p_a = p[1];
+    const double p_b = p[2];
+    const double p_m = p[3];
+    const double tmp4 = p_a + p_b;
+    const double tmp5 = (tmp4*tmp4);
+    const double tmp6 = p_a - p_b;
+    const double tmp7 = (tmp6*tmp6);
+    const double M0_0 = p_m;
+    const double M1_1 = p_m;
+    const double M2_2 = p_I;
+    pre[0] = p_I;
+    pre[1] = p_a;
+    pre[2] = p_b;
+    pre[3] = p_m;
+    pre[4] = tmp4;
+    pre[5] = tmp5;
+    pre[6] = tmp6;
+    pre[7] = tmp7;
+    if (!(isfinite(M0_0))) return 1;
+    if (!(isfinite(M1_1))) return 1;
+    if (!(isfinite(M2_2))) return 1;
+    if (!(M0_0 > 0.0)) return 1;
+    if (!(M1_1 > 0.0)) return 1;
+    if (!(M2_2 > 0.0)) return 1;
+    return 0;
+}
+
+/* impact_wall of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_unscaled_impact_wall(const double *q, const double *v, const double *p, double *out, double u1, double u2, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)pre;
+    const double p_I = pre[0];
+    const double p_a = pre[1];
+    const double p_b = pre[2];
+    const double p_m = pre[3];
+    const double tmp4 = pre[4];
+    const double tmp5 = pre[5];
+    const double tmp6 = pre[6];
+    const double tmp7 = pre[7];
+    const double q_theta = q[2];
+    const double v_xdot = v[0];
+    const double v_ydot = v[1];
+    const double v_thetadot = v[2];
+    const double tmp0 = sin(q_theta);
+    const double tmp1 = (tmp0*tmp0);
+    const double tmp2 = cos(q_theta);
+    const double tmp3 = (tmp2*tmp2);
+    const double tmp8 = p_I*(p_a*p_a)*tmp3 + p_I*(p_b*p_b)*tmp1;
+    const double tmp9 = (1.0/(p_m*tmp1*tmp3*tmp5*tmp7 + tmp8));
+    const double tmp10 = v_thetadot*tmp9;
+    const double tmp11 = 2.0*tmp0*tmp2*tmp4*tmp6*hypot(p_a*tmp2, p_b*tmp0);
+    const double tmp12 = -p_m*tmp1*tmp3*tmp5*tmp7 + tmp8;
+    const double tmp13 = tmp9*v_xdot;
+    const double sm_out_0 = p_I*tmp10*tmp11 - tmp12*tmp13;
+    const double sm_out_1 = v_ydot;
+    const double sm_out_2 = p_m*tmp11*tmp13 + tmp10*tmp12;
+    const double sm_up_0 = (sm_out_0 * u1) * u2;
+    const double sm_up_1 = (sm_out_1 * u1) * u2;
+    const double sm_up_2 = (sm_out_2 * u1) * u2;
+    out[0] = sm_up_0;
+    out[1] = sm_up_1;
+    out[2] = sm_up_2;
+    const double sm_nonfinite = (sm_up_0 - sm_up_0) + (sm_up_1 - sm_up_1) + (sm_up_2 - sm_up_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
+/* The batch's first pass over a block of states: w = v 2^-e and u = (u1, u2), as above. */
+static void sm_scale_down_impact_wall(const double *v, double *w, double *u)
+{
+    double scale = 0.0;
+    for (int i = 0; i < 3; ++i) {
+        const double a = fabs(v[i]);
+        if (a > scale) scale = a;
+    }
+    /* scale = f 2^e, 0.5 <= f < 1, -1073 <= e <= 1024: e from the exponent bits, or
+       frexp for a subnormal scale; 2^-e and 2^e as two normal factors each
+       (|e/2| <= 537), so every product is exact.  A zero, infinite or NaN scale: e = 0. */
+    uint64_t bits;
+    memcpy(&bits, &scale, sizeof bits);
+    int e = (int)(bits >> 52) - 1022;
+    if ((bits >> 52) == 0) (void)frexp(scale, &e);
+    if (!(scale > 0.0 && isfinite(scale))) e = 0;
+    const double d1 = sm_pow2(-e / 2), d2 = sm_pow2(-e - -e / 2);
+    const double u1 = sm_pow2(e / 2), u2 = sm_pow2(e - e / 2);
+    for (int i = 0; i < 3; ++i) w[i] = (v[i] * d1) * d2;
+    u[0] = u1;
+    u[1] = u2;
+}
+
 long symmech_bouncing_ellipse_impact_wall_batch(long count, const double *q, const double *v, const double *p, double *out)
 {
+    double pre[8];
+    if (sm_once_impact_wall(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
-    for (long i = 0; i < count; ++i) {
-        int status = symmech_bouncing_ellipse_impact_wall(q + i*3, v + i*3, p, out + i*3);
-        if (status != SYMMECH_OK && first == 0) first = i + 1;
+    /* in blocks of 64 states: their scalings first, then the states (two short
+       dependency chains per state instead of one long one) */
+    double w[192], u[128];
+    for (long i0 = 0; i0 < count; i0 += 64) {
+        const long m = count - i0 < 64 ? count - i0 : 64;
+        for (long j = 0; j < m; ++j) sm_scale_down_impact_wall(v + (i0 + j)*3, w + j*3, u + 2*j);
+        for (long j = 0; j < m; ++j) {
+            const long i = i0 + j;
+            int status = sm_each_unscaled_impact_wall(q + i*3, w + j*3, p, out + i*3, u[2*j], u[2*j + 1], pre);
+            if (status != SYMMECH_OK && first == 0) first = i + 1;
+        }
     }
     return first;
 }

@@ -80,11 +80,110 @@ int symmech_carnot_4_4_mass_matrix(const double *q, const double *p, double *out
     return sm_check_finite(36, out);
 }
 
+/*
+ * mass_matrix for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_mass_matrix(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_k = p[1];
+    const double tmp0 = (p_k*p_k);
+    pre[0] = tmp0;
+    return 0;
+}
+
+/* mass_matrix of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_mass_matrix(const double *q, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)p;
+    (void)pre;
+    const double tmp0 = pre[0];
+    const double sm_out_0 = 1.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    const double sm_out_3 = 0.0;
+    const double sm_out_4 = 0.0;
+    const double sm_out_5 = 0.0;
+    const double sm_out_6 = 0.0;
+    const double sm_out_7 = 1.0;
+    const double sm_out_8 = 0.0;
+    const double sm_out_9 = 0.0;
+    const double sm_out_10 = 0.0;
+    const double sm_out_11 = 0.0;
+    const double sm_out_12 = 0.0;
+    const double sm_out_13 = 0.0;
+    const double sm_out_14 = 1.0;
+    const double sm_out_15 = 0.0;
+    const double sm_out_16 = 0.0;
+    const double sm_out_17 = 0.0;
+    const double sm_out_18 = 0.0;
+    const double sm_out_19 = 0.0;
+    const double sm_out_20 = 0.0;
+    const double sm_out_21 = tmp0;
+    const double sm_out_22 = 0.0;
+    const double sm_out_23 = 0.0;
+    const double sm_out_24 = 0.0;
+    const double sm_out_25 = 0.0;
+    const double sm_out_26 = 0.0;
+    const double sm_out_27 = 0.0;
+    const double sm_out_28 = tmp0;
+    const double sm_out_29 = 0.0;
+    const double sm_out_30 = 0.0;
+    const double sm_out_31 = 0.0;
+    const double sm_out_32 = 0.0;
+    const double sm_out_33 = 0.0;
+    const double sm_out_34 = 0.0;
+    const double sm_out_35 = tmp0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    out[3] = sm_out_3;
+    out[4] = sm_out_4;
+    out[5] = sm_out_5;
+    out[6] = sm_out_6;
+    out[7] = sm_out_7;
+    out[8] = sm_out_8;
+    out[9] = sm_out_9;
+    out[10] = sm_out_10;
+    out[11] = sm_out_11;
+    out[12] = sm_out_12;
+    out[13] = sm_out_13;
+    out[14] = sm_out_14;
+    out[15] = sm_out_15;
+    out[16] = sm_out_16;
+    out[17] = sm_out_17;
+    out[18] = sm_out_18;
+    out[19] = sm_out_19;
+    out[20] = sm_out_20;
+    out[21] = sm_out_21;
+    out[22] = sm_out_22;
+    out[23] = sm_out_23;
+    out[24] = sm_out_24;
+    out[25] = sm_out_25;
+    out[26] = sm_out_26;
+    out[27] = sm_out_27;
+    out[28] = sm_out_28;
+    out[29] = sm_out_29;
+    out[30] = sm_out_30;
+    out[31] = sm_out_31;
+    out[32] = sm_out_32;
+    out[33] = sm_out_33;
+    out[34] = sm_out_34;
+    out[35] = sm_out_35;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2) + (sm_out_3 - sm_out_3) + (sm_out_4 - sm_out_4) + (sm_out_5 - sm_out_5) + (sm_out_6 - sm_out_6) + (sm_out_7 - sm_out_7) + (sm_out_8 - sm_out_8) + (sm_out_9 - sm_out_9) + (sm_out_10 - sm_out_10) + (sm_out_11 - sm_out_11) + (sm_out_12 - sm_out_12) + (sm_out_13 - sm_out_13) + (sm_out_14 - sm_out_14) + (sm_out_15 - sm_out_15) + (sm_out_16 - sm_out_16) + (sm_out_17 - sm_out_17) + (sm_out_18 - sm_out_18) + (sm_out_19 - sm_out_19) + (sm_out_20 - sm_out_20) + (sm_out_21 - sm_out_21) + (sm_out_22 - sm_out_22) + (sm_out_23 - sm_out_23) + (sm_out_24 - sm_out_24) + (sm_out_25 - sm_out_25) + (sm_out_26 - sm_out_26) + (sm_out_27 - sm_out_27) + (sm_out_28 - sm_out_28) + (sm_out_29 - sm_out_29) + (sm_out_30 - sm_out_30) + (sm_out_31 - sm_out_31) + (sm_out_32 - sm_out_32) + (sm_out_33 - sm_out_33) + (sm_out_34 - sm_out_34) + (sm_out_35 - sm_out_35);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_mass_matrix_batch(long count, const double *q, const double *p, double *out)
 {
+    double pre[1];
+    if (sm_once_mass_matrix(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_mass_matrix(q + i*6, p, out + i*36);
+        int status = sm_each_mass_matrix(q + i*6, p, out + i*36, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -108,11 +207,33 @@ int symmech_carnot_4_4_forcing(const double *q, const double *v, double *out)
     return sm_check_finite(6, out);
 }
 
+/* forcing of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_forcing(const double *q, const double *v, double *out)
+{
+    (void)q;
+    (void)v;
+    const double sm_out_0 = 0.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    const double sm_out_3 = 0.0;
+    const double sm_out_4 = 0.0;
+    const double sm_out_5 = 0.0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    out[3] = sm_out_3;
+    out[4] = sm_out_4;
+    out[5] = sm_out_5;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2) + (sm_out_3 - sm_out_3) + (sm_out_4 - sm_out_4) + (sm_out_5 - sm_out_5);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_forcing_batch(long count, const double *q, const double *v, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_forcing(q + i*6, v + i*6, out + i*6);
+        int status = sm_each_forcing(q + i*6, v + i*6, out + i*6);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -155,11 +276,69 @@ int symmech_carnot_4_4_acceleration(const double *q, const double *v, const doub
     return sm_check_finite(6, out);
 }
 
+/*
+ * acceleration for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_acceleration(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_k = p[1];
+    const double p_r = p[2];
+    const double tmp0 = (p_k*p_k);
+    const double M3_3 = tmp0;
+    const double M4_4 = tmp0;
+    const double M5_5 = tmp0;
+    const double mu0_4 = -p_r;
+    const double mu1_3 = p_r;
+    const double X3_1 = mu1_3/M3_3;
+    const double X4_0 = mu0_4/M4_4;
+    const double C0_0 = 1.0 + mu0_4*X4_0;
+    const double C1_1 = 1.0 + mu1_3*X3_1;
+    if (!(isfinite(M3_3))) return 1;
+    if (!(isfinite(M4_4))) return 1;
+    if (!(isfinite(M5_5))) return 1;
+    if (!(isfinite(mu1_3))) return 1;
+    if (!(isfinite(mu0_4))) return 1;
+    if (!(M3_3 > 0.0)) return 1;
+    if (!(M4_4 > 0.0)) return 1;
+    if (!(M5_5 > 0.0)) return 1;
+    if (!(C0_0 > 0.0)) return 1;
+    if (!(C1_1 > 0.0)) return 1;
+    return 0;
+}
+
+/* acceleration of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_acceleration(const double *q, const double *v, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)pre;
+    const double sm_out_0 = 0.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    const double sm_out_3 = 0.0;
+    const double sm_out_4 = 0.0;
+    const double sm_out_5 = 0.0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    out[3] = sm_out_3;
+    out[4] = sm_out_4;
+    out[5] = sm_out_5;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2) + (sm_out_3 - sm_out_3) + (sm_out_4 - sm_out_4) + (sm_out_5 - sm_out_5);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_acceleration_batch(long count, const double *q, const double *v, const double *p, double *out)
 {
+    double pre[1];
+    if (sm_once_acceleration(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_acceleration(q + i*6, v + i*6, p, out + i*6);
+        int status = sm_each_acceleration(q + i*6, v + i*6, p, out + i*6, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -200,11 +379,46 @@ int symmech_carnot_4_4_rhs(const double *y, const double *p, double *out)
     return sm_check_finite(12, out);
 }
 
+/* rhs of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_rhs(const double *y, const double *p, double *out)
+{
+    const double *q = y;
+    const double *v = y + 6;
+    (void)y;
+    (void)p;
+    (void)q;
+    (void)v;
+    const double q_theta = q[4];
+    const double q_psi = q[5];
+    const double v_v_x = v[0];
+    const double v_v_y = v[1];
+    const double v_v_z = v[2];
+    const double v_omega_x = v[3];
+    const double v_omega_y = v[4];
+    const double v_omega_z = v[5];
+    const double tmp0 = (1.0/sin(q_theta));
+    const double tmp1 = sin(q_psi);
+    const double tmp2 = v_omega_x*tmp1;
+    const double tmp3 = cos(q_psi);
+    const double tmp4 = v_omega_y*tmp3;
+    const double tmp5 = (1.0/tan(q_theta));
+    out[0] = v_v_x;
+    out[1] = v_v_y;
+    out[2] = v_v_z;
+    out[3] = tmp0*tmp2 - tmp0*tmp4;
+    out[4] = v_omega_x*tmp3 + v_omega_y*tmp1;
+    out[5] = v_omega_z - tmp2*tmp5 + tmp4*tmp5;
+    int status = symmech_carnot_4_4_acceleration(q, v, p, out + 6);
+    if (status != SYMMECH_OK) return status;
+    if (sm_check_finite(12, out) != SYMMECH_OK) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_rhs_batch(long count, const double *y, const double *p, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_rhs(y + i*12, p, out + i*12);
+        int status = sm_each_rhs(y + i*12, p, out + i*12);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -230,11 +444,47 @@ int symmech_carnot_4_4_energy(const double *q, const double *v, const double *p,
     return sm_check_finite(1, out);
 }
 
+/*
+ * energy for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_energy(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_k = p[1];
+    const double tmp0 = (0.5)*(p_k*p_k);
+    pre[0] = tmp0;
+    return 0;
+}
+
+/* energy of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_energy(const double *q, const double *v, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)pre;
+    const double tmp0 = pre[0];
+    const double v_v_x = v[0];
+    const double v_v_y = v[1];
+    const double v_v_z = v[2];
+    const double v_omega_x = v[3];
+    const double v_omega_y = v[4];
+    const double v_omega_z = v[5];
+    const double sm_out_0 = (v_omega_x*v_omega_x)*tmp0 + (v_omega_y*v_omega_y)*tmp0 + (v_omega_z*v_omega_z)*tmp0 + (0.5)*(v_v_x*v_v_x) + (0.5)*(v_v_y*v_v_y) + (0.5)*(v_v_z*v_v_z);
+    out[0] = sm_out_0;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_energy_batch(long count, const double *q, const double *v, const double *p, double *out)
 {
+    double pre[1];
+    if (sm_once_energy(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_energy(q + i*6, v + i*6, p, out + i*1);
+        int status = sm_each_energy(q + i*6, v + i*6, p, out + i*1, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -274,11 +524,63 @@ int symmech_carnot_4_4_multipliers(const double *q, const double *v, const doubl
     return sm_check_finite(3, out);
 }
 
+/*
+ * multipliers for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_multipliers(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_k = p[1];
+    const double p_r = p[2];
+    const double tmp0 = (p_k*p_k);
+    const double M3_3 = tmp0;
+    const double M4_4 = tmp0;
+    const double M5_5 = tmp0;
+    const double mu0_4 = -p_r;
+    const double mu1_3 = p_r;
+    const double X3_1 = mu1_3/M3_3;
+    const double X4_0 = mu0_4/M4_4;
+    const double C0_0 = 1.0 + mu0_4*X4_0;
+    const double C1_1 = 1.0 + mu1_3*X3_1;
+    if (!(isfinite(M3_3))) return 1;
+    if (!(isfinite(M4_4))) return 1;
+    if (!(isfinite(M5_5))) return 1;
+    if (!(isfinite(mu1_3))) return 1;
+    if (!(isfinite(mu0_4))) return 1;
+    if (!(M3_3 > 0.0)) return 1;
+    if (!(M4_4 > 0.0)) return 1;
+    if (!(M5_5 > 0.0)) return 1;
+    if (!(C0_0 > 0.0)) return 1;
+    if (!(C1_1 > 0.0)) return 1;
+    return 0;
+}
+
+/* multipliers of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_multipliers(const double *q, const double *v, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)pre;
+    const double sm_out_0 = 0.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_multipliers_batch(long count, const double *q, const double *v, const double *p, double *out)
 {
+    double pre[1];
+    if (sm_once_multipliers(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_multipliers(q + i*6, v + i*6, p, out + i*3);
+        int status = sm_each_multipliers(q + i*6, v + i*6, p, out + i*3, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -304,11 +606,49 @@ int symmech_carnot_4_4_constraint_residual(const double *q, const double *v, con
     return sm_check_finite(3, out);
 }
 
+/*
+ * constraint_residual for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_constraint_residual(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_r = p[2];
+    pre[0] = p_r;
+    return 0;
+}
+
+/* constraint_residual of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_constraint_residual(const double *q, const double *v, const double *p, double *out, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)pre;
+    const double p_r = pre[0];
+    const double v_v_x = v[0];
+    const double v_v_y = v[1];
+    const double v_v_z = v[2];
+    const double v_omega_x = v[3];
+    const double v_omega_y = v[4];
+    const double sm_out_0 = -v_omega_y*p_r + v_v_x;
+    const double sm_out_1 = v_omega_x*p_r + v_v_y;
+    const double sm_out_2 = v_v_z;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_constraint_residual_batch(long count, const double *q, const double *v, const double *p, double *out)
 {
+    double pre[1];
+    if (sm_once_constraint_residual(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_constraint_residual(q + i*6, v + i*6, p, out + i*3);
+        int status = sm_each_constraint_residual(q + i*6, v + i*6, p, out + i*3, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -327,11 +667,25 @@ int symmech_carnot_4_4_psi_rough_wall(const double *q, const double *u, double *
     return sm_check_finite(1, out);
 }
 
+/* psi_rough_wall of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_psi_rough_wall(const double *q, const double *u, double *out)
+{
+    (void)q;
+    (void)u;
+    const double q_x = q[0];
+    const double u_f_t = u[0];
+    const double sm_out_0 = -u_f_t + q_x;
+    out[0] = sm_out_0;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_psi_rough_wall_batch(long count, const double *q, const double *u, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_psi_rough_wall(q + i*6, u + i*2, out + i*1);
+        int status = sm_each_psi_rough_wall(q + i*6, u + i*2, out + i*1);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -354,11 +708,32 @@ int symmech_carnot_4_4_dpsi_rough_wall(const double *q, double *out)
     return sm_check_finite(6, out);
 }
 
+/* dpsi_rough_wall of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_dpsi_rough_wall(const double *q, double *out)
+{
+    (void)q;
+    const double sm_out_0 = 1.0;
+    const double sm_out_1 = 0.0;
+    const double sm_out_2 = 0.0;
+    const double sm_out_3 = 0.0;
+    const double sm_out_4 = 0.0;
+    const double sm_out_5 = 0.0;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    out[3] = sm_out_3;
+    out[4] = sm_out_4;
+    out[5] = sm_out_5;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2) + (sm_out_3 - sm_out_3) + (sm_out_4 - sm_out_4) + (sm_out_5 - sm_out_5);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_dpsi_rough_wall_batch(long count, const double *q, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_dpsi_rough_wall(q + i*6, out + i*6);
+        int status = sm_each_dpsi_rough_wall(q + i*6, out + i*6);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -377,11 +752,24 @@ int symmech_carnot_4_4_psit_rough_wall(const double *q, const double *u, double 
     return sm_check_finite(1, out);
 }
 
+/* psit_rough_wall of one state of the batch: the same doubles as the one-state function. */
+static int sm_each_psit_rough_wall(const double *q, const double *u, double *out)
+{
+    (void)q;
+    (void)u;
+    const double u_Derivative_f_t_t = u[1];
+    const double sm_out_0 = -u_Derivative_f_t_t;
+    out[0] = sm_out_0;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_psit_rough_wall_batch(long count, const double *q, const double *u, double *out)
 {
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_psit_rough_wall(q + i*6, u + i*2, out + i*1);
+        int status = sm_each_psit_rough_wall(q + i*6, u + i*2, out + i*1);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
@@ -449,11 +837,121 @@ int symmech_carnot_4_4_impact_rough_wall(const double *q, const double *v, const
     return sm_check_finite(6, out);
 }
 
+/*
+ * impact_rough_wall for the batch loop: the locals that read only p, once per batch, into
+ * pre[]; 1 when a check on them fails (then every state fails).
+ */
+static int sm_once_impact_rough_wall(const double *p, double *pre)
+{
+    (void)pre;
+    const double p_alpha = p[0];
+    const double p_k = p[1];
+    const double p_r = p[2];
+    const double tmp0 = (p_k*p_k);
+    const double tmp1 = -p_r;
+    const double M3_3 = tmp0;
+    const double M4_4 = tmp0;
+    const double M5_5 = tmp0;
+    const double A0_4 = tmp1;
+    const double A1_3 = p_r;
+    const double A4_5 = tmp1;
+    const double s0 = p_alpha;
+    const double Y3_1 = A1_3/M3_3;
+    const double Y4_0 = A0_4/M4_4;
+    const double Y5_4 = A4_5/M5_5;
+    const double G0_0 = 1.0 + A0_4*Y4_0;
+    const double G1_1 = 1.0 + A1_3*Y3_1;
+    const double G4_4 = 1.0 + A4_5*Y5_4;
+    const double Lgi0 = 1.0/sqrt(G0_0);
+    const double Lgi1 = 1.0/sqrt(G1_1);
+    const double Lgp3 = 1.0 - Lgi0*Lgi0;
+    const double Lgi3 = 1.0/sqrt(Lgp3);
+    const double Lgp4 = G4_4 - Lgi1*Lgi1;
+    const double Lgi4 = 1.0/sqrt(Lgp4);
+    pre[0] = A0_4;
+    pre[1] = A1_3;
+    pre[2] = A4_5;
+    pre[3] = s0;
+    pre[4] = Y3_1;
+    pre[5] = Y4_0;
+    pre[6] = Y5_4;
+    pre[7] = Lgi0;
+    pre[8] = Lgi1;
+    pre[9] = Lgi3;
+    pre[10] = Lgi4;
+    if (!(isfinite(M3_3))) return 1;
+    if (!(isfinite(M4_4))) return 1;
+    if (!(isfinite(M5_5))) return 1;
+    if (!(isfinite(A1_3))) return 1;
+    if (!(isfinite(A0_4))) return 1;
+    if (!(isfinite(A4_5))) return 1;
+    if (!(isfinite(s0))) return 1;
+    if (!(M3_3 > 0.0)) return 1;
+    if (!(M4_4 > 0.0)) return 1;
+    if (!(M5_5 > 0.0)) return 1;
+    if (!(G0_0 > 0.0)) return 1;
+    if (!(G1_1 > 0.0)) return 1;
+    if (!(Lgp3 > 0.0)) return 1;
+    if (!(Lgp4 > 0.0)) return 1;
+    return 0;
+}
+
+/* impact_rough_wall of one state of the batch, given pre[]: the same doubles as the one-state function. */
+static int sm_each_impact_rough_wall(const double *q, const double *v, const double *p, const double *u, double *out, const double *pre)
+{
+    (void)q;
+    (void)v;
+    (void)p;
+    (void)u;
+    (void)pre;
+    const double A0_4 = pre[0];
+    const double A1_3 = pre[1];
+    const double A4_5 = pre[2];
+    const double s0 = pre[3];
+    const double Y3_1 = pre[4];
+    const double Y4_0 = pre[5];
+    const double Y5_4 = pre[6];
+    const double Lgi0 = pre[7];
+    const double Lgi1 = pre[8];
+    const double Lgi3 = pre[9];
+    const double Lgi4 = pre[10];
+    const double u_Derivative_f_t_t = u[1];
+    const double s1 = -u_Derivative_f_t_t;
+    if (!(isfinite(v[0]) && isfinite(s1) && isfinite(v[1]) && isfinite(v[5]) && isfinite(v[4]) && isfinite(v[3]) && isfinite(v[2]))) return SYMMECH_NONFINITE;
+    const double r3 = (1.0 + s0)*((-v[0]) - s1);
+    const double r4 = -(v[1] + A4_5*v[5]);
+    const double r0_0 = (-(v[0] + A0_4*v[4]))*Lgi0;
+    const double r1_0 = (-(v[1] + A1_3*v[3]))*Lgi1;
+    const double r3_0 = (r3 - Lgi0*r0_0)*Lgi3;
+    const double r4_0 = (r4 - Lgi1*r1_0)*Lgi4;
+    const double r4_0_2 = r4_0*Lgi4;
+    const double r3_0_2 = r3_0*Lgi3;
+    const double r1_0_2 = (r1_0 - Lgi1*r4_0_2)*Lgi1;
+    const double r0_0_2 = (r0_0 - Lgi0*r3_0_2)*Lgi0;
+    const double sm_out_0 = v[0] + r0_0_2 + r3_0_2;
+    const double sm_out_1 = v[1] + r1_0_2 + r4_0_2;
+    const double sm_out_2 = v[2] + (-v[2]);
+    const double sm_out_3 = v[3] + Y3_1*r1_0_2;
+    const double sm_out_4 = v[4] + Y4_0*r0_0_2;
+    const double sm_out_5 = v[5] + Y5_4*r4_0_2;
+    out[0] = sm_out_0;
+    out[1] = sm_out_1;
+    out[2] = sm_out_2;
+    out[3] = sm_out_3;
+    out[4] = sm_out_4;
+    out[5] = sm_out_5;
+    const double sm_nonfinite = (sm_out_0 - sm_out_0) + (sm_out_1 - sm_out_1) + (sm_out_2 - sm_out_2) + (sm_out_3 - sm_out_3) + (sm_out_4 - sm_out_4) + (sm_out_5 - sm_out_5);
+    if (!(sm_nonfinite == 0.0)) return SYMMECH_NONFINITE;
+    return SYMMECH_OK;
+}
+
 long symmech_carnot_4_4_impact_rough_wall_batch(long count, const double *q, const double *v, const double *p, const double *u, double *out)
 {
+    double pre[11];
+    if (sm_once_impact_rough_wall(p, pre) != 0) return count > 0 ? 1 : 0;
     long first = 0;
     for (long i = 0; i < count; ++i) {
-        int status = symmech_carnot_4_4_impact_rough_wall(q + i*6, v + i*6, p, u + i*2, out + i*6);
+        int status = sm_each_impact_rough_wall(q + i*6, v + i*6, p, u + i*2, out + i*6, pre);
         if (status != SYMMECH_OK && first == 0) first = i + 1;
     }
     return first;
