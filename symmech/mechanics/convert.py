@@ -61,7 +61,14 @@ from symmech.algebra.zero import is_zero
 from symmech.declaration.checks import Points
 from symmech.declaration.dynamic import DynamicTranslation
 from symmech.errors import SceneError
+from symmech.geometry.derivatives import Derivative
 from symmech.mechanics.model import Model, mechanics
+from symmech.mechanics.rates import (
+    TimeDerivative,
+    speed_partials,
+    time_derivative,
+    vector_dot,
+)
 from symmech.mechanics.refusals import non_smooth_in, reading, refuse_non_smooth
 
 __all__ = ["scene_arguments"]
@@ -86,7 +93,10 @@ def _partials(vec: Any, model: Model, what: str) -> list[Any]:
 def _partials_of(vec: Any, model: Model, what: str) -> list[Any]:
     frame = model.frame
     vec = _in_basis(vec, model)
-    parts = [vec.diff(w, frame, var_in_dcm=False) for w in model.basis]
+    if model.speed_symbols is None:
+        plain = [sp.Dummy(str(w)) for w in model.basis]
+        model.speed_symbols = (dict(zip(model.basis, plain, strict=True)), Derivative(plain))
+    parts = speed_partials(vec, *model.speed_symbols)
     rest = vec.xreplace({w: 0 for w in model.basis})
     if rest != 0 and rest.to_matrix(frame).applyfunc(sp.expand) != sp.zeros(3, 1):
         # (a position through Abs: its derivative's re, im and sign are not velocities)
@@ -105,15 +115,16 @@ _KINEMATICS_HINT = (
 
 
 def _dot(a: Any, b: Any, expand: bool = True) -> sp.Expr:
-    """``a . b``; with ``expand``, expanded and summed term by term: ``b_i D_ij a_j`` over
-    the frame components of a and b with ``D`` the direction cosines between their frames
-    (what ``sympy.physics.vector`` multiplies as matrices).  The expansion of a polynomial
-    in the same atoms is the same expression whichever way its terms were grouped, so
-    this is ``sp.expand(a & b)`` without the matrix products."""
+    """``a . b`` (:func:`~symmech.mechanics.rates.vector_dot`); with ``expand``,
+    expanded and summed term by term: ``b_i D_ij a_j`` over the frame components of a and
+    b with ``D`` the direction cosines between their frames (what
+    ``sympy.physics.vector`` multiplies as matrices).  The expansion of a polynomial in
+    the same atoms is the same expression whichever way its terms were grouped, so this
+    is ``sp.expand(a & b)`` without the matrix products."""
     if a == 0 or b == 0:
         return sp.S.Zero
     if not expand:
-        return a & b
+        return vector_dot(a, b)
     terms = []
     for ca, fa in a.args:
         for cb, fb in b.args:
@@ -357,12 +368,14 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
     frame = model.frame
     n = len(model.basis)
     still = {w.diff(t): 0 for w in model.basis}
+    rates = {d.expr: e for d, e in model._qdot_map().items()}
+    dt = TimeDerivative(rates, set(model.basis), t)
     f = [sp.S.Zero] * n
     for body in model.bodies:
         v = _in_basis(body.masscenter.vel(frame), model)
         parts = _partials(body.masscenter.vel(frame), model, f"{body}: mass centre velocity")
         given = body.masscenter._acc_dict.get(frame)
-        a0 = _as_set(given, model) if given is not None else v.dt(frame)
+        a0 = _as_set(given, model) if given is not None else time_derivative(v, frame, dt)
         a0 = _in_basis(a0.xreplace(still), model)
         for r in range(n):
             f[r] -= body.mass * _dot(a0, parts[r], expand=False)
@@ -370,7 +383,7 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
             w = _in_basis(body.frame.ang_vel_in(frame), model)
             wparts = _partials(body.frame.ang_vel_in(frame), model, f"{body}: angular velocity")
             given = body.frame._ang_acc_dict.get(frame)
-            alpha0 = _as_set(given, model) if given is not None else w.dt(frame)
+            alpha0 = _as_set(given, model) if given is not None else time_derivative(w, frame, dt)
             alpha0 = _in_basis(alpha0.xreplace(still), model)
             inertia = body.central_inertia
             torque = (inertia & alpha0) + (w ^ (inertia & w))
