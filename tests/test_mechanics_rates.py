@@ -14,6 +14,7 @@ from symmech.algebra.stability import _evidently_irreducible
 from symmech.geometry.derivatives import Derivative
 from symmech.mechanics.rates import (
     TimeDerivative,
+    expanded_dots,
     speed_partials,
     time_derivative,
     vector_dot,
@@ -94,3 +95,13 @@ def test_evidently_irreducible_polynomials_factor_as_sympy_writes_them():
     assert _evidently_irreducible(sp.expand((a + b) * (a - b))) is None  # not evident
     e = -6 * a * b**2 - 2 * b  # -2 b (3 a b + 1): a is of degree one, in one term
     assert _evidently_irreducible(e) == sp.factor(e) == -2 * b * (3 * a * b + 1)
+
+
+def test_expanded_dots_are_sympys_expansions():
+    N, vectors, _, _ = _rolling_disc()
+    pairs = [(a, b) for a in vectors for b in vectors]
+    assert expanded_dots(pairs) == [sp.expand(a & b) for a, b in pairs]
+    # a float (or a function whose argument expand would change) takes sympy's route
+    x = sp.Symbol("x")
+    odd = [(vectors[0], 0.5 * N.x + sp.sin(2 * (x + 1)) * N.y), (vectors[1], N.z)]
+    assert expanded_dots(odd) == [sp.expand(a & b) for a, b in odd]

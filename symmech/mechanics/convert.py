@@ -65,6 +65,7 @@ from symmech.geometry.derivatives import Derivative
 from symmech.mechanics.model import Model, mechanics
 from symmech.mechanics.rates import (
     TimeDerivative,
+    expanded_dots,
     speed_partials,
     time_derivative,
     vector_dot,
@@ -114,48 +115,29 @@ _KINEMATICS_HINT = (
 )
 
 
-def _dot(a: Any, b: Any, expand: bool = True) -> sp.Expr:
-    """``a . b`` (:func:`~symmech.mechanics.rates.vector_dot`); with ``expand``,
-    expanded and summed term by term: ``b_i D_ij a_j`` over the frame components of a and
-    b with ``D`` the direction cosines between their frames (what
-    ``sympy.physics.vector`` multiplies as matrices).  The expansion of a polynomial in
-    the same atoms is the same expression whichever way its terms were grouped, so this
-    is ``sp.expand(a & b)`` without the matrix products."""
-    if a == 0 or b == 0:
-        return sp.S.Zero
-    if not expand:
-        return vector_dot(a, b)
-    terms = []
-    for ca, fa in a.args:
-        for cb, fb in b.args:
-            D = fb.dcm(fa)
-            terms += [
-                cb[i] * D[i, j] * ca[j]
-                for i in range(3)
-                if cb[i] != 0
-                for j in range(3)
-                if D[i, j] != 0 and ca[j] != 0
-            ]
-    return sp.expand(sp.Add(*terms))
-
-
 def _metric(model: Model) -> sp.Matrix:
-    """M_rs = sum m v_P,r . v_P,s + w_B,r . I_B . w_B,s (module docstring)."""
+    """M_rs = sum m v_P,r . v_P,s + w_B,r . I_B . w_B,s (module docstring), each dot
+    product expanded (:func:`~symmech.mechanics.rates.expanded_dots`)."""
     me = mechanics()
     n = len(model.basis)
     M = sp.zeros(n, n)
+    pairs, where = [], []  # the dot products, and (r, s, factor) each is added to
     for body in model.bodies:
         vel = _partials(body.masscenter.vel(model.frame), model, f"{body}: mass centre velocity")
         for r in range(n):
             for s in range(r, n):
-                M[r, s] += body.mass * _dot(vel[r], vel[s])
+                pairs.append((vel[r], vel[s]))
+                where.append((r, s, body.mass))
         if isinstance(body, me.RigidBody):
             w = _partials(body.frame.ang_vel_in(model.frame), model, f"{body}: angular velocity")
             inertia = body.central_inertia
             Iw = [(inertia & x) if x != 0 else 0 for x in w]
             for r in range(n):
                 for s in range(r, n):
-                    M[r, s] += _dot(w[r], Iw[s])
+                    pairs.append((w[r], Iw[s]))
+                    where.append((r, s, None))
+    for (r, s, mass), dot in zip(where, expanded_dots(pairs), strict=True):
+        M[r, s] += dot if mass is None else mass * dot
     from symmech.algebra.simplification import normal_form
 
     for r in range(n):
@@ -281,7 +263,7 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
         refuse_non_smooth(vector.to_matrix(model.frame), f"the load on {where}")
         if isinstance(where, me.ReferenceFrame):
             w = _partials(where.ang_vel_in(model.frame), model, f"torque on {where}")
-            F = [a + _dot(vector, b) for a, b in zip(F, w, strict=True)]
+            F = [a + b for a, b in zip(F, expanded_dots([(vector, x) for x in w]), strict=True)]
             continue
         try:
             velocity = where.vel(model.frame)
@@ -292,7 +274,7 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
                 " v2pt_theory before building the model)"
             ) from None
         vel = _partials(velocity, model, f"force at {where}")
-        Fr = [_dot(vector, b) for b in vel]
+        Fr = expanded_dots([(vector, b) for b in vel])
         if _constant_in(vector, model.frame):
             origin = model.origin if model.origin is not None else _origin(where, model.frame)
             candidate = None
@@ -378,7 +360,7 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
         a0 = _as_set(given, model) if given is not None else time_derivative(v, frame, dt)
         a0 = _in_basis(a0.xreplace(still), model)
         for r in range(n):
-            f[r] -= body.mass * _dot(a0, parts[r], expand=False)
+            f[r] -= body.mass * vector_dot(a0, parts[r])
         if isinstance(body, me.RigidBody):
             w = _in_basis(body.frame.ang_vel_in(frame), model)
             wparts = _partials(body.frame.ang_vel_in(frame), model, f"{body}: angular velocity")
@@ -388,7 +370,7 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
             inertia = body.central_inertia
             torque = (inertia & alpha0) + (w ^ (inertia & w))
             for r in range(n):
-                f[r] -= _dot(torque, wparts[r], expand=False)
+                f[r] -= vector_dot(torque, wparts[r])
     return f
 
 

@@ -19,11 +19,12 @@ from typing import Any
 import sympy as sp
 from sympy.core.function import AppliedUndef
 from sympy.physics.vector.frame import CoordinateSym
+from sympy.polys.rings import ring
 
 from symmech.algebra.canonical import add, mul
 from symmech.geometry.derivatives import Derivative
 
-__all__ = ["TimeDerivative", "speed_partials", "time_derivative", "vector_dot"]
+__all__ = ["TimeDerivative", "expanded_dots", "speed_partials", "time_derivative", "vector_dot"]
 
 
 def speed_partials(vec: Any, speeds: dict[sp.Expr, sp.Dummy], D: Derivative) -> list[Any]:
@@ -155,3 +156,80 @@ def vector_dot(a: Any, b: Any) -> sp.Expr:
             if terms:
                 out += sp.Add(*terms)
     return out
+
+
+def expanded_dots(pairs: list[tuple[Any, Any]]) -> list[sp.Expr]:
+    """``sp.expand(a & b)`` for each pair of vectors: the products ``b_i D_ij a_j`` of
+    their measure numbers and direction cosines (``D`` between their frames) multiplied
+    out in one sparse polynomial ring over QQ for all pairs (each measure number
+    converted once), then written back as sympy writes an expanded polynomial.  When a
+    part is not a polynomial of rationals in symbols and function values that ``expand``
+    leaves alone (a float, a fractional power, a function whose argument it would
+    expand), every pair is expanded by ``sp.expand`` instead."""
+    triples = [_dot_terms(a, b) for a, b in pairs]
+    R = _ring_of([f for terms in triples for t in terms for f in t])
+    if R is None:
+        return [sp.expand(sp.Add(*[x * y * z for x, y, z in terms])) for terms in triples]
+    converted: dict[sp.Expr, Any] = {}
+
+    def element(e: sp.Expr) -> Any:
+        hit = converted.get(e)
+        if hit is None:
+            hit = converted[e] = R.from_expr(e)
+        return hit
+
+    out = []
+    for terms in triples:
+        p = R.zero
+        for x, y, z in terms:
+            p += element(x) * element(y) * element(z)
+        out.append(p.as_expr())
+    return out
+
+
+def _dot_terms(a: Any, b: Any) -> list[tuple[sp.Expr, sp.Expr, sp.Expr]]:
+    """The factors ``(b_i, D_ij, a_j)`` of the non-zero products that sum to ``a . b``."""
+    if a == 0 or b == 0:
+        return []
+    out = []
+    for ca, fa in a.args:
+        for cb, fb in b.args:
+            D = fb.dcm(fa)
+            out += [
+                (cb[i], D[i, j], ca[j])
+                for i in range(3)
+                if cb[i] != 0
+                for j in range(3)
+                if D[i, j] != 0 and ca[j] != 0
+            ]
+    return out
+
+
+def _ring_of(parts: list[sp.Expr]) -> Any:
+    """A polynomial ring over QQ whose generators are those of ``parts`` (reached through
+    sums, products and positive integer powers), or None when a part holds a number
+    other than a rational or a generator other than a symbol or a function value that
+    ``sp.expand`` returns unchanged."""
+    found: set[sp.Expr] = set()
+    seen: set[sp.Expr] = set()
+    stack = list(parts)
+    while stack:
+        e = stack.pop()
+        if e in seen:
+            continue
+        seen.add(e)
+        if e.is_Number:
+            if not e.is_Rational:
+                return None
+        elif e.is_Add or e.is_Mul:
+            stack.extend(e.args)
+        elif e.is_Pow and e.exp.is_Integer and e.exp > 0:
+            stack.append(e.base)
+        elif e.is_Symbol or (isinstance(e, sp.Function) and sp.expand(e) == e):
+            found.add(e)
+        else:
+            return None
+    if not found:
+        return None
+    R, *_ = ring(sorted(found, key=sp.default_sort_key), sp.QQ)
+    return R
