@@ -60,6 +60,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from symmech.algebra.opcount import count_ops
 from symmech.codegen.dialects import Dialect
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
 from symmech.codegen.printers import (
@@ -328,10 +329,11 @@ class _Elimination:
 def _operations(
     replacements: Sequence[tuple[sp.Symbol, sp.Expr]], reduced: Sequence[sp.Expr]
 ) -> int:
-    """``sympy.count_ops`` of the temporaries and of the reduced entries."""
-    return int(
-        sum(sp.count_ops(e) for _, e in replacements)
-        + sum(sp.count_ops(e) for e in reduced if not e.is_number)
+    """``sympy.count_ops`` of the temporaries and of the reduced entries
+    (:func:`symmech.algebra.opcount.count_ops`, the same integer)."""
+    memo: dict = {}
+    return sum(count_ops(e, memo) for _, e in replacements) + sum(
+        count_ops(e, memo) for e in reduced if not e.is_number
     )
 
 
