@@ -14,9 +14,11 @@ from symmech.algebra.stability import _evidently_irreducible
 from symmech.geometry.derivatives import Derivative
 from symmech.mechanics.rates import (
     TimeDerivative,
+    dyadic_dot,
     expanded_dots,
     speed_partials,
     time_derivative,
+    vector_cross,
     vector_dot,
 )
 
@@ -105,3 +107,12 @@ def test_expanded_dots_are_sympys_expansions():
     x = sp.Symbol("x")
     odd = [(vectors[0], 0.5 * N.x + sp.sin(2 * (x + 1)) * N.y), (vectors[1], N.z)]
     assert expanded_dots(odd) == [sp.expand(a & b) for a, b in odd]
+
+
+def test_cross_products_and_dyadic_dots_are_sympys():
+    N, vectors, _, _ = _rolling_disc()
+    inertia = me.inertia(N, 1, 2, 3, sp.Symbol("ixy"), 0, sp.Symbol("izx"))
+    for a in vectors:
+        assert dyadic_dot(inertia, a) == (inertia & a)
+        for b in [*vectors, me.Vector(0)]:
+            assert vector_cross(a, b) == (a ^ b)

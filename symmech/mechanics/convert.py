@@ -65,9 +65,11 @@ from symmech.geometry.derivatives import Derivative
 from symmech.mechanics.model import Model, mechanics
 from symmech.mechanics.rates import (
     TimeDerivative,
+    dyadic_dot,
     expanded_dots,
     speed_partials,
     time_derivative,
+    vector_cross,
     vector_dot,
 )
 from symmech.mechanics.refusals import non_smooth_in, reading, refuse_non_smooth
@@ -131,7 +133,7 @@ def _metric(model: Model) -> sp.Matrix:
         if isinstance(body, me.RigidBody):
             w = _partials(body.frame.ang_vel_in(model.frame), model, f"{body}: angular velocity")
             inertia = body.central_inertia
-            Iw = [(inertia & x) if x != 0 else 0 for x in w]
+            Iw = [dyadic_dot(inertia, x) if x != 0 else 0 for x in w]
             for r in range(n):
                 for s in range(r, n):
                     pairs.append((w[r], Iw[s]))
@@ -368,7 +370,7 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
             alpha0 = _as_set(given, model) if given is not None else time_derivative(w, frame, dt)
             alpha0 = _in_basis(alpha0.xreplace(still), model)
             inertia = body.central_inertia
-            torque = (inertia & alpha0) + (w ^ (inertia & w))
+            torque = dyadic_dot(inertia, alpha0) + vector_cross(w, dyadic_dot(inertia, w))
             for r in range(n):
                 f[r] -= vector_dot(torque, wparts[r])
     return f

@@ -24,7 +24,15 @@ from sympy.polys.rings import ring
 from symmech.algebra.canonical import add, mul
 from symmech.geometry.derivatives import Derivative
 
-__all__ = ["TimeDerivative", "expanded_dots", "speed_partials", "time_derivative", "vector_dot"]
+__all__ = [
+    "TimeDerivative",
+    "dyadic_dot",
+    "expanded_dots",
+    "speed_partials",
+    "time_derivative",
+    "vector_cross",
+    "vector_dot",
+]
 
 
 def speed_partials(vec: Any, speeds: dict[sp.Expr, sp.Dummy], D: Derivative) -> list[Any]:
@@ -126,7 +134,7 @@ def time_derivative(vec: Any, frame: Any, d: TimeDerivative) -> Any:
         for m, f in vec.args:
             out.append((m.applyfunc(d), f))
             if f != frame:
-                out += (f.ang_vel_in(frame) ^ vector([(m, f)])).args
+                out += vector_cross(f.ang_vel_in(frame), vector([(m, f)])).args
         return vector(out)
     except _Unsupported:
         t = d.t
@@ -233,3 +241,33 @@ def _ring_of(parts: list[sp.Expr]) -> Any:
         return None
     R, *_ = ring(sorted(found, key=sp.default_sort_key), sp.QQ)
     return R
+
+
+def dyadic_dot(dyadic: Any, vec: Any) -> Any:
+    """``dyadic & vec`` as sympy's ``Dyadic.dot`` forms it (``sum c b1 (b2 . vec)``),
+    with :func:`vector_dot` for the dot products."""
+    out = type(vec)(0)
+    for c, b1, b2 in dyadic.args:
+        out += c * b1 * vector_dot(b2, vec)
+    return out
+
+
+def vector_cross(a: Any, b: Any) -> Any:
+    """``a ^ b`` as sympy's ``Vector.cross`` forms it (a determinant per frame component
+    of ``b``, its rows the frame's unit vectors, their dot products with ``a`` and with
+    the component), with :func:`vector_dot` for the dot products."""
+    vector = type(a)
+    if b.args == []:
+        return vector(0)
+    out = []
+    for component in b.args:
+        units = [component[1].x, component[1].y, component[1].z]
+        part = vector([component])
+        m = [units, [vector_dot(a, e) for e in units], [vector_dot(part, e) for e in units]]
+        det = (
+            m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            + m[0][1] * (m[1][2] * m[2][0] - m[1][0] * m[2][2])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+        )
+        out += det.args
+    return vector(out)
