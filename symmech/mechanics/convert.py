@@ -306,10 +306,24 @@ def _identically_zero(exprs: Sequence[sp.Expr]) -> bool:
 
 def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: Model) -> bool:
     """Whether ``F_r = -(S^T dV/dq)_r`` holds at random points (ties the candidate potential
-    to the force's generalized active force)."""
-    grad = sp.Matrix([sp.diff(V, c) for c in model.q])
-    lhs = model.S.T * grad if model.S is not None else grad
+    to the force's generalized active force).  ``(S^T dV/dq)_r`` is the derivative of V
+    along the r-th column of S (:class:`~symmech.geometry.derivatives.Derivative`, the
+    coordinates made plain symbols): only its values are compared."""
+    lhs = _along_frame(V, model)
     return _identically_zero([a + b for a, b in zip(lhs, Fr, strict=True)])
+
+
+def _along_frame(e: sp.Expr, model: Model) -> list[sp.Expr]:
+    """``S^T de/dq`` (``de/dq`` without a frame), for judging its values: the derivatives
+    along the frame's columns by :class:`~symmech.geometry.derivatives.Derivative`, the
+    coordinates made plain symbols (the same values as sympy's ``diff``, written as the
+    product rule leaves them)."""
+    plain = {c: sp.Dummy(str(c.func)) for c in model.q}
+    back = {d: c for c, d in plain.items()}
+    S = model.S.xreplace(plain) if model.S is not None else None
+    D = Derivative(list(plain.values()), S)
+    flat = e.xreplace(plain)
+    return [D(flat, r).xreplace(back) for r in range(len(model.basis))]
 
 
 def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
@@ -321,10 +335,11 @@ def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
             f" free of the speeds {bad}; symmech takes homogeneous constraints mu(q) v = 0"
             " (a constraint with a prescribed rate is prescribed motion)"
         )
+    # the differentiated holonomic rows are judged by their values (_along_frame), and
+    # formed by sympy's diff and expanded once kept (a dropped one, often the derivative
+    # of a velocity constraint the model also gives, is never formed)
     rows = [list(r) for r in model.velocity_rows]
-    for h in model.holonomic:
-        grad = sp.Matrix([[sp.diff(h, c) for c in model.q]])
-        rows.append(list(grad * model.S if model.S is not None else grad))
+    rows += [_along_frame(h, model) for h in model.holonomic]
     if not rows:
         return []
     M = sp.Matrix(rows)
@@ -333,10 +348,16 @@ def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
     for a in range(len(rows)):
         if rank_at(M.extract([*kept, a], list(range(M.cols))), point) == len(kept) + 1:
             kept.append(a)
-    # the differentiated holonomic rows are expanded once kept (a dropped one, often the
-    # derivative of a velocity constraint the model also gives, is never expanded)
     first = len(model.velocity_rows)
-    return [rows[a] if a < first else [sp.expand(e) for e in rows[a]] for a in kept]
+    return [
+        rows[a] if a < first else _holonomic_row(model.holonomic[a - first], model) for a in kept
+    ]
+
+
+def _holonomic_row(h: sp.Expr, model: Model) -> list[sp.Expr]:
+    """The differentiated holonomic constraint ``dh/dq S``, expanded."""
+    grad = sp.Matrix([[sp.diff(h, c) for c in model.q]])
+    return [sp.expand(e) for e in (grad * model.S if model.S is not None else grad)]
 
 
 def _inertia_forcing(model: Model) -> list[sp.Expr]:
