@@ -24,11 +24,11 @@ For the Whipple bicycle of sympy's own test suite (Meijaard et al. 2007; 4 coord
 
 Where the time goes (the rhs run, CPU seconds of each step timed alone on a quiet
 machine; ``--profile`` prints cProfile of the same run, which inflates sympy's many
-small calls): the import about 1.0 s (``mechanics.convert``: the metric from the
+small calls): the import about 0.9 s (``mechanics.convert``: the metric from the
 partial velocities 0.2, Kane's inertia forces 0.1 and the velocity-quadratic forcing
-0.1 that they are compared with (memoised: the scene's forcing reuses it), the loads
-0.1, the constraints 0.1, then the declaration's checks 0.25, half of them the metric's
-definiteness with parameters declared without a sign); the generation about 1.3 s (the
+0.1 that they are compared with (memoised: the scene's forcing reuses it), the loads and
+the constraints 0.1 together, then the declaration's checks 0.25, half of them the
+metric's definiteness with parameters declared without a sign); the generation about 1.3 s (the
 stable forms of the velocity-free entries 0.45, three quarters of it on the 15
 constraint entries holding square roots, ``algebra.stability``; one CSE 0.3; the note
 on the forcing's zero connection coefficients 0.15; printing); gcc about 0.6 s.  The
