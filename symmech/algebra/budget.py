@@ -40,6 +40,7 @@ from contextvars import ContextVar
 import sympy as sp
 
 from symmech.algebra.block_structure import diagonal_blocks
+from symmech.algebra.opcount import count_ops
 from symmech.errors import SymmechError
 
 __all__ = [
@@ -274,7 +275,7 @@ def affordable(expr: sp.Basic, max_ops: int) -> bool:
     whose step expands: an operation count alone misses a power of a sum.  Also a
     :func:`checkpoint` of the deadline (every expensive step passes this gate first)."""
     checkpoint()
-    if sp.count_ops(expr) > max_ops:
+    if count_ops(expr) > max_ops:
         return False
     return expanded_terms(expr, EXPAND_TERMS + 1)[0] <= EXPAND_TERMS
 

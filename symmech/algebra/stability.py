@@ -35,6 +35,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 
 import sympy as sp
+from sympy.core.mul import _keep_coeff
 
 from symmech.algebra import budget as limits
 from symmech.algebra.memo import expression_cache
@@ -46,8 +47,45 @@ __all__ = ["stable_coefficient", "stable_linear", "stable_matrix"]
 def _factor(e: sp.Expr) -> sp.Expr:
     """``sympy.factor(e)``, memoised until sympy's cache is cleared: the entries of a
     metric or a constraint matrix share parameter coefficients (the bicycle's 28 stable
-    entries factor 37 distinct polynomials in 138 calls)."""
-    return sp.factor(e)
+    entries factor 37 distinct polynomials in 138 calls).  A polynomial that is
+    irreducible by :func:`_evidently_irreducible` is returned as ``factor`` writes it
+    without the search for factors."""
+    if e.is_Atom:
+        return e
+    quick = _evidently_irreducible(e)
+    return sp.factor(e) if quick is None else quick
+
+
+def _evidently_irreducible(e: sp.Expr) -> sp.Expr | None:
+    """``sympy.factor(e)`` when, once its integer and monomial contents are taken out, the
+    integer polynomial ``e`` has a generator of degree one in exactly one of its terms
+    (``x A + B`` with A a monomial: a common factor of A and B would divide every term,
+    and there is none left, so the rest is irreducible); else None.  Written as
+    ``factor`` writes it: content, then the monomial, then the primitive part with a
+    positive leading coefficient (``dmp_zz_factor``).  Most parameter coefficients of a
+    metric (sums of inertias and masses times lengths) are of this kind, and the
+    multivariate factorisation costs far more than this test."""
+    try:
+        p = sp.Poly(e)
+    except (sp.PolynomialError, sp.GeneratorsNeeded):
+        return None
+    if not p.domain.is_ZZ or not all(g.is_Symbol or g.is_Function for g in p.gens):
+        return None
+    monomial, rest = p.terms_gcd()
+    content, rest = rest.primitive()
+    if rest.LC() < 0:
+        content, rest = -content, -rest
+    terms = rest.monoms()
+    if len(terms) < 2:
+        return None
+    linear = any(
+        sum(1 for m in terms if m[k]) == 1 and max(m[k] for m in terms) == 1
+        for k in range(len(rest.gens))
+    )
+    if not linear:
+        return None
+    powers = [g**k for g, k in zip(rest.gens, monomial, strict=True)]
+    return _keep_coeff(content.as_expr(), sp.Mul(rest.as_expr(), *powers))
 
 
 def _state_generators(expr: sp.Expr, state: frozenset) -> list[sp.Expr]:
@@ -107,6 +145,13 @@ def _generators(expr: sp.Expr) -> set[sp.Expr]:
     return found
 
 
+def _polynomial(expr: sp.Expr) -> bool:
+    """Whether every power in ``expr`` (function arguments included) has a positive
+    integer exponent: a polynomial in its symbols and function values, with nothing for
+    ``together`` to put over a common denominator."""
+    return all(p.exp.is_Integer and p.exp > 0 for p in expr.atoms(sp.Pow))
+
+
 def _gathered(part: sp.Expr, state: frozenset) -> sp.Expr:
     """The stable form of a numerator or denominator in many symbols, without factoring
     it as a whole: expanded (like terms combine exactly) and written as a sum over its
@@ -160,6 +205,8 @@ def stable_coefficient(expr: sp.Expr, state: Iterable[sp.Symbol] = ()) -> sp.Exp
     expr, opaque = _opaque_exponentials(expr)
     st = st | {d for d, e in opaque.items() if e.free_symbols & st}
     if len(_generators(expr)) > limits.STABLE_FACTOR_GENERATORS:
+        if _polynomial(expr):  # (together only pulls out common factors, expand undoes)
+            return _gathered(expr, st).xreplace(opaque)
         num, den = sp.fraction(sp.together(expr))
         return (_gathered(num, st) / _gathered(den, st)).xreplace(opaque)
     c = sp.cancel(sp.together(expr))

@@ -36,6 +36,7 @@ from symmech.algebra import budget as limits
 from symmech.algebra.field import field_zero
 from symmech.algebra.identity import Unsupported, identically_zero
 from symmech.algebra.numeric import vanishes
+from symmech.algebra.opcount import count_ops
 from symmech.algebra.sampling import sample_points
 
 __all__ = ["ZeroVerdict", "is_zero", "zero_verdict"]
@@ -73,7 +74,7 @@ def zero_verdict(expr: sp.Basic, points: Sequence[Mapping] | None = None) -> Zer
         return ZeroVerdict(True, "structure")
     if e.is_Rational:
         return ZeroVerdict(False, "structure")
-    ops = sp.count_ops(e)
+    ops = count_ops(e)
     if ops <= limits.ZERO_TEST_OPS and field_zero(e):
         return ZeroVerdict(True, "normal form")
     if ops <= limits.ZERO_EXACT_OPS:

@@ -60,6 +60,7 @@ from dataclasses import dataclass
 
 import sympy as sp
 
+from symmech.algebra.opcount import count_ops
 from symmech.codegen.dialects import Dialect
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
 from symmech.codegen.printers import (
@@ -278,11 +279,24 @@ class Memo:
     """What the functions of one generated scene share, computed once per ``generate``
     call: each entry as it is printed (:meth:`printable`) and the CSE of each distinct
     list of entries (:meth:`eliminated`; ``acceleration`` and ``multipliers`` solve the
-    same system).  Scoped to the call, so nothing outlives the code it served."""
+    same system), and the text of each expression a backend's printer printed
+    (:meth:`texts`).  Scoped to the call, so nothing outlives the code it served."""
 
     def __init__(self) -> None:
         self._printable: dict[sp.Expr, sp.Expr] = {}
         self._eliminated: dict[tuple[sp.Expr, ...], _Elimination] = {}
+        self._texts: dict[tuple[object, int], tuple[Names, dict[sp.Expr, str]]] = {}
+
+    def texts(self, make_printer: object, names: Names) -> dict[sp.Expr, str]:
+        """The printed text of each expression, for one printer maker and table of names:
+        a temporary prints as its name, so an expression's text is the same in every
+        function of the scene (``multipliers`` prints the temporaries of
+        ``acceleration`` again)."""
+        key = (make_printer, id(names))
+        hit = self._texts.get(key)
+        if hit is None or hit[0] is not names:
+            hit = self._texts[key] = (names, {})
+        return hit[1]
 
     def printable(self, e: sp.Expr) -> sp.Expr:
         """An entry as it is printed: :func:`~symmech.codegen.printers.safe_rewrite`,
@@ -328,10 +342,11 @@ class _Elimination:
 def _operations(
     replacements: Sequence[tuple[sp.Symbol, sp.Expr]], reduced: Sequence[sp.Expr]
 ) -> int:
-    """``sympy.count_ops`` of the temporaries and of the reduced entries."""
-    return int(
-        sum(sp.count_ops(e) for _, e in replacements)
-        + sum(sp.count_ops(e) for e in reduced if not e.is_number)
+    """``sympy.count_ops`` of the temporaries and of the reduced entries
+    (:func:`symmech.algebra.opcount.count_ops`, the same integer)."""
+    memo: dict = {}
+    return sum(count_ops(e, memo) for _, e in replacements) + sum(
+        count_ops(e, memo) for e in reduced if not e.is_number
     )
 
 
@@ -434,11 +449,16 @@ def lower(
         table[s] = s.name
     printer = make_printer(table)
 
+    texts = memo.texts(make_printer, names)
+
     def pr(e: sp.Expr) -> str:
-        try:
-            return printer.doprint(e)
-        except ValueError as exc:
-            raise CodegenError(f"{f.name}: cannot print {e}: {exc}") from None
+        text = texts.get(e)
+        if text is None:
+            try:
+                text = texts[e] = printer.doprint(e)
+            except ValueError as exc:
+                raise CodegenError(f"{f.name}: cannot print {e}: {exc}") from None
+        return text
 
     temporaries = tuple((s.name, pr(e)) for s, e in replacements)
     printed = tuple(

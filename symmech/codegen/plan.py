@@ -47,6 +47,7 @@ from sympy.core.function import AppliedUndef
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
+from symmech.algebra.opcount import count_ops
 from symmech.algebra.stability import stable_coefficient
 from symmech.algebra.walk import atoms
 from symmech.codegen.blocks import (
@@ -475,7 +476,7 @@ def _build(
         if (
             not out.is_number
             and not (out.free_symbols & velocity_set)
-            and sp.count_ops(out) <= limits.STABLE_ENTRY_OPS
+            and count_ops(out) <= limits.STABLE_ENTRY_OPS
         ):
             out = stable_coefficient(out, state)
         prepared[e] = out

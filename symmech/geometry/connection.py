@@ -35,6 +35,7 @@ import sympy as sp
 
 from symmech.algebra.canonical import add, keep_coeff, mul
 from symmech.algebra.field import field_solve
+from symmech.algebra.memo import expression_cache
 from symmech.algebra.simplification import Level, check_level, polish, simplify_all, tidy
 from symmech.geometry.derivatives import Derivative
 
@@ -225,13 +226,42 @@ def forcing(
     In coordinates this is ``f_k = -Gamma_kij q_dot^i q_dot^j - dV/dq^k`` (slides 000,
     geodesic equation; Carnot paper eq. 2 multiplied by g).  Only the part of omega
     symmetric in (i, j) contributes; it is formed for i <= j, with zero metric derivatives
-    skipped, so the cost grows with the number of non-zero terms, not n^3.
+    skipped, so the cost grows with the number of non-zero terms, not n^3.  The
+    velocity-quadratic part is memoised (:func:`_quadratic`): a scene imported from a
+    mechanics model forms it once for the comparison with Kane's inertia forces and
+    once as its forcing.
     """
     check_level(level, "forcing")
+    D = Derivative(q, frame)
+    quadratic = _quadratic(
+        sp.ImmutableMatrix(G),
+        tuple(q),
+        tuple(v),
+        None if frame is None else sp.ImmutableMatrix(frame),
+        None if commutation is None else sp.ImmutableDenseNDimArray(commutation),
+    )
+    V = sp.sympify(V, strict=True)
+    if frame is None:
+        rows = [_minus(f, D(V, k)) for k, f in enumerate(quadratic)]
+    else:
+        rows = [f - D(V, k) for k, f in enumerate(quadratic)]
+    return sp.Matrix([tidy(r, level) for r in rows])
+
+
+@expression_cache(maxsize=64)
+def _quadratic(
+    G: sp.ImmutableMatrix,
+    q: tuple[sp.Symbol, ...],
+    v: tuple[sp.Symbol, ...],
+    frame: sp.ImmutableMatrix | None,
+    commutation: sp.Array | None,
+) -> tuple[sp.Expr, ...]:
+    """``-omega_kij v^i v^j`` for each k, as :func:`forcing` sums it (in coordinates
+    :func:`_quadratic_coordinates`), memoised until sympy's cache is cleared."""
     n = len(q)
     D = Derivative(q, frame)
     if frame is None:
-        return _forcing_coordinates(G, V, q, v, D, level)
+        return _quadratic_coordinates(G, q, v, D)
     c = _sparse(commutation, n)
     rows = []
     for k in range(n):
@@ -245,19 +275,17 @@ def forcing(
                 if w == 0:
                     continue
                 terms.append(w * v[i] ** 2 if i == j else 2 * w * v[i] * v[j])
-        rows.append(tidy(-sp.Add(*terms) - D(sp.sympify(V, strict=True), k), level))
-    return sp.Matrix(rows)
+        rows.append(-sp.Add(*terms))
+    return tuple(rows)
 
 
-def _forcing_coordinates(
+def _quadratic_coordinates(
     G: sp.MatrixBase,
-    V: sp.Expr,
     q: Sequence[sp.Symbol],
     v: Sequence[sp.Symbol],
     D: Derivative,
-    level: Level,
-) -> sp.Matrix:
-    """Sparse assembly of ``f_k = -Gamma_kij v^i v^j - dV/dq^k`` from the metric derivatives.
+) -> tuple[sp.Expr, ...]:
+    """Sparse assembly of ``-Gamma_kij v^i v^j`` from the metric derivatives.
 
     With ``Gamma_kij v^i v^j = sum_ij (d_i g_jk - 1/2 d_k g_ij) v^i v^j``, every non-zero
     derivative ``d = d g_ij / d q^a`` (i <= j) is visited once and scattered:
@@ -295,12 +323,9 @@ def _forcing_coordinates(
                     scatter(a, i, j, sp.S.One, d)
                     scatter(i, a, j, minus, d)
                     scatter(j, a, i, minus, d)
-    rows = []
-    for k in range(n):
-        terms = [mul(add(*coefs), v[i], v[j]) for (i, j), coefs in acc[k].items()]
-        dV = D(sp.sympify(V, strict=True), k)
-        rows.append(tidy(_minus(add(*terms), dV), level))
-    return sp.Matrix(rows)
+    return tuple(
+        add(*[mul(add(*coefs), v[i], v[j]) for (i, j), coefs in acc[k].items()]) for k in range(n)
+    )
 
 
 def _minus(x: sp.Expr, y: sp.Expr) -> sp.Expr:

@@ -61,7 +61,17 @@ from symmech.algebra.zero import is_zero
 from symmech.declaration.checks import Points
 from symmech.declaration.dynamic import DynamicTranslation
 from symmech.errors import SceneError
+from symmech.geometry.derivatives import Derivative
 from symmech.mechanics.model import Model, mechanics
+from symmech.mechanics.rates import (
+    TimeDerivative,
+    dyadic_dot,
+    expanded_dots,
+    speed_partials,
+    time_derivative,
+    vector_cross,
+    vector_dot,
+)
 from symmech.mechanics.refusals import non_smooth_in, reading, refuse_non_smooth
 
 __all__ = ["scene_arguments"]
@@ -86,7 +96,10 @@ def _partials(vec: Any, model: Model, what: str) -> list[Any]:
 def _partials_of(vec: Any, model: Model, what: str) -> list[Any]:
     frame = model.frame
     vec = _in_basis(vec, model)
-    parts = [vec.diff(w, frame, var_in_dcm=False) for w in model.basis]
+    if model.speed_symbols is None:
+        plain = [sp.Dummy(str(w)) for w in model.basis]
+        model.speed_symbols = (dict(zip(model.basis, plain, strict=True)), Derivative(plain))
+    parts = speed_partials(vec, *model.speed_symbols)
     rest = vec.xreplace({w: 0 for w in model.basis})
     if rest != 0 and rest.to_matrix(frame).applyfunc(sp.expand) != sp.zeros(3, 1):
         # (a position through Abs: its derivative's re, im and sign are not velocities)
@@ -104,47 +117,29 @@ _KINEMATICS_HINT = (
 )
 
 
-def _dot(a: Any, b: Any, expand: bool = True) -> sp.Expr:
-    """``a . b``; with ``expand``, expanded and summed term by term: ``b_i D_ij a_j`` over
-    the frame components of a and b with ``D`` the direction cosines between their frames
-    (what ``sympy.physics.vector`` multiplies as matrices).  The expansion of a polynomial
-    in the same atoms is the same expression whichever way its terms were grouped, so
-    this is ``sp.expand(a & b)`` without the matrix products."""
-    if a == 0 or b == 0:
-        return sp.S.Zero
-    if not expand:
-        return a & b
-    terms = []
-    for ca, fa in a.args:
-        for cb, fb in b.args:
-            D = fb.dcm(fa)
-            terms += [
-                cb[i] * D[i, j] * ca[j]
-                for i in range(3)
-                if cb[i] != 0
-                for j in range(3)
-                if D[i, j] != 0 and ca[j] != 0
-            ]
-    return sp.expand(sp.Add(*terms))
-
-
 def _metric(model: Model) -> sp.Matrix:
-    """M_rs = sum m v_P,r . v_P,s + w_B,r . I_B . w_B,s (module docstring)."""
+    """M_rs = sum m v_P,r . v_P,s + w_B,r . I_B . w_B,s (module docstring), each dot
+    product expanded (:func:`~symmech.mechanics.rates.expanded_dots`)."""
     me = mechanics()
     n = len(model.basis)
     M = sp.zeros(n, n)
+    pairs, where = [], []  # the dot products, and (r, s, factor) each is added to
     for body in model.bodies:
         vel = _partials(body.masscenter.vel(model.frame), model, f"{body}: mass centre velocity")
         for r in range(n):
             for s in range(r, n):
-                M[r, s] += body.mass * _dot(vel[r], vel[s])
+                pairs.append((vel[r], vel[s]))
+                where.append((r, s, body.mass))
         if isinstance(body, me.RigidBody):
             w = _partials(body.frame.ang_vel_in(model.frame), model, f"{body}: angular velocity")
             inertia = body.central_inertia
-            Iw = [(inertia & x) if x != 0 else 0 for x in w]
+            Iw = [dyadic_dot(inertia, x) if x != 0 else 0 for x in w]
             for r in range(n):
                 for s in range(r, n):
-                    M[r, s] += _dot(w[r], Iw[s])
+                    pairs.append((w[r], Iw[s]))
+                    where.append((r, s, None))
+    for (r, s, mass), dot in zip(where, expanded_dots(pairs), strict=True):
+        M[r, s] += dot if mass is None else mass * dot
     from symmech.algebra.simplification import normal_form
 
     for r in range(n):
@@ -270,7 +265,7 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
         refuse_non_smooth(vector.to_matrix(model.frame), f"the load on {where}")
         if isinstance(where, me.ReferenceFrame):
             w = _partials(where.ang_vel_in(model.frame), model, f"torque on {where}")
-            F = [a + _dot(vector, b) for a, b in zip(F, w, strict=True)]
+            F = [a + b for a, b in zip(F, expanded_dots([(vector, x) for x in w]), strict=True)]
             continue
         try:
             velocity = where.vel(model.frame)
@@ -281,7 +276,7 @@ def _loads(model: Model) -> tuple[sp.Expr, list[sp.Expr]]:
                 " v2pt_theory before building the model)"
             ) from None
         vel = _partials(velocity, model, f"force at {where}")
-        Fr = [_dot(vector, b) for b in vel]
+        Fr = expanded_dots([(vector, b) for b in vel])
         if _constant_in(vector, model.frame):
             origin = model.origin if model.origin is not None else _origin(where, model.frame)
             candidate = None
@@ -311,10 +306,24 @@ def _identically_zero(exprs: Sequence[sp.Expr]) -> bool:
 
 def _is_gradient(V: sp.Expr, Fr: Sequence[sp.Expr], model: Model) -> bool:
     """Whether ``F_r = -(S^T dV/dq)_r`` holds at random points (ties the candidate potential
-    to the force's generalized active force)."""
-    grad = sp.Matrix([sp.diff(V, c) for c in model.q])
-    lhs = model.S.T * grad if model.S is not None else grad
+    to the force's generalized active force).  ``(S^T dV/dq)_r`` is the derivative of V
+    along the r-th column of S (:class:`~symmech.geometry.derivatives.Derivative`, the
+    coordinates made plain symbols): only its values are compared."""
+    lhs = _along_frame(V, model)
     return _identically_zero([a + b for a, b in zip(lhs, Fr, strict=True)])
+
+
+def _along_frame(e: sp.Expr, model: Model) -> list[sp.Expr]:
+    """``S^T de/dq`` (``de/dq`` without a frame), for judging its values: the derivatives
+    along the frame's columns by :class:`~symmech.geometry.derivatives.Derivative`, the
+    coordinates made plain symbols (the same values as sympy's ``diff``, written as the
+    product rule leaves them)."""
+    plain = {c: sp.Dummy(str(c.func)) for c in model.q}
+    back = {d: c for c, d in plain.items()}
+    S = model.S.xreplace(plain) if model.S is not None else None
+    D = Derivative(list(plain.values()), S)
+    flat = e.xreplace(plain)
+    return [D(flat, r).xreplace(back) for r in range(len(model.basis))]
 
 
 def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
@@ -326,10 +335,11 @@ def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
             f" free of the speeds {bad}; symmech takes homogeneous constraints mu(q) v = 0"
             " (a constraint with a prescribed rate is prescribed motion)"
         )
+    # the differentiated holonomic rows are judged by their values (_along_frame), and
+    # formed by sympy's diff and expanded once kept (a dropped one, often the derivative
+    # of a velocity constraint the model also gives, is never formed)
     rows = [list(r) for r in model.velocity_rows]
-    for h in model.holonomic:
-        grad = sp.Matrix([[sp.diff(h, c) for c in model.q]])
-        rows.append(list(grad * model.S if model.S is not None else grad))
+    rows += [_along_frame(h, model) for h in model.holonomic]
     if not rows:
         return []
     M = sp.Matrix(rows)
@@ -338,10 +348,16 @@ def _constraint_rows(model: Model) -> list[list[sp.Expr]]:
     for a in range(len(rows)):
         if rank_at(M.extract([*kept, a], list(range(M.cols))), point) == len(kept) + 1:
             kept.append(a)
-    # the differentiated holonomic rows are expanded once kept (a dropped one, often the
-    # derivative of a velocity constraint the model also gives, is never expanded)
     first = len(model.velocity_rows)
-    return [rows[a] if a < first else [sp.expand(e) for e in rows[a]] for a in kept]
+    return [
+        rows[a] if a < first else _holonomic_row(model.holonomic[a - first], model) for a in kept
+    ]
+
+
+def _holonomic_row(h: sp.Expr, model: Model) -> list[sp.Expr]:
+    """The differentiated holonomic constraint ``dh/dq S``, expanded."""
+    grad = sp.Matrix([[sp.diff(h, c) for c in model.q]])
+    return [sp.expand(e) for e in (grad * model.S if model.S is not None else grad)]
 
 
 def _inertia_forcing(model: Model) -> list[sp.Expr]:
@@ -357,25 +373,27 @@ def _inertia_forcing(model: Model) -> list[sp.Expr]:
     frame = model.frame
     n = len(model.basis)
     still = {w.diff(t): 0 for w in model.basis}
+    rates = {d.expr: e for d, e in model._qdot_map().items()}
+    dt = TimeDerivative(rates, set(model.basis), t)
     f = [sp.S.Zero] * n
     for body in model.bodies:
         v = _in_basis(body.masscenter.vel(frame), model)
         parts = _partials(body.masscenter.vel(frame), model, f"{body}: mass centre velocity")
         given = body.masscenter._acc_dict.get(frame)
-        a0 = _as_set(given, model) if given is not None else v.dt(frame)
+        a0 = _as_set(given, model) if given is not None else time_derivative(v, frame, dt)
         a0 = _in_basis(a0.xreplace(still), model)
         for r in range(n):
-            f[r] -= body.mass * _dot(a0, parts[r], expand=False)
+            f[r] -= body.mass * vector_dot(a0, parts[r])
         if isinstance(body, me.RigidBody):
             w = _in_basis(body.frame.ang_vel_in(frame), model)
             wparts = _partials(body.frame.ang_vel_in(frame), model, f"{body}: angular velocity")
             given = body.frame._ang_acc_dict.get(frame)
-            alpha0 = _as_set(given, model) if given is not None else w.dt(frame)
+            alpha0 = _as_set(given, model) if given is not None else time_derivative(w, frame, dt)
             alpha0 = _in_basis(alpha0.xreplace(still), model)
             inertia = body.central_inertia
-            torque = (inertia & alpha0) + (w ^ (inertia & w))
+            torque = dyadic_dot(inertia, alpha0) + vector_cross(w, dyadic_dot(inertia, w))
             for r in range(n):
-                f[r] -= _dot(torque, wparts[r], expand=False)
+                f[r] -= vector_dot(torque, wparts[r])
     return f
 
 

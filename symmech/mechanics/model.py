@@ -69,6 +69,9 @@ class Model:
     #: the model's attributes that hold each part, for the refusals ("kinematics":
     #: q_dot = S u; "constraints": velocity and configuration constraints)
     names: dict[str, str]
+    #: the speeds as plain symbols and the memoised derivatives along them (set by the
+    #: first partial velocity, :func:`symmech.mechanics.convert._speed_partials`)
+    speed_symbols: tuple[dict, Any] | None = None
 
     def __init__(self, model: object):
         self.partials: dict = {}
