@@ -34,7 +34,7 @@ The split is conservative: a name it does not know (a state array, ``t``, ``u``,
 macro) makes its line a ``state`` line.  The exported one-state function keeps the
 whole body; the batch loop calls a ``static`` per-state function the compiler can inline.
 The body is so printed twice, which doubles its compile time: a body longer than
-:data:`MAX_SPLIT_CHARACTERS` (an imported bicycle's forcing, where the batch gains
+:data:`MAX_SPLIT_CHARACTERS` (an imported bicycle's functions, where the batch gains
 little against the work of each state) is not split, and its batch loop calls the
 exported function for each state.
 """
@@ -50,9 +50,11 @@ from symmech.codegen.lower import LoweredFunction
 __all__ = ["MAX_SPLIT_CHARACTERS", "BatchSplit", "batch_split"]
 
 #: The longest one-state body (characters of its printed lines) that the batch loop
-#: prints a second time, split (module docstring); the 8-link pendulum on a cart's
-#: acceleration has 15,000, an imported bicycle's forcing several 100,000.
-MAX_SPLIT_CHARACTERS = 50_000
+#: prints a second time, split (module docstring): the 4-link pendulum on a cart's
+#: acceleration has 5,300 and is split; the 8-link one's 15,000 and the imported
+#: bicycle's functions (15,000 to 45,000: printing them twice doubled the compile time
+#: from the model to loaded C) are not.
+MAX_SPLIT_CHARACTERS = 10_000
 
 _LET = re.compile(r"^const double (\w+) = (.*);$")
 _CHECK = re.compile(r"^if \(!\((.*)\)\) return (SYMMECH_\w+);$")
