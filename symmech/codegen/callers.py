@@ -307,29 +307,7 @@ def c_raw(
             raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
         return arrays[-1].reshape(out_shape).copy()
 
-    fast: Fast | None = None
-    if spec.one_state_fast:
-        # what the fast path accepts: float64 (or int64) vectors of the right length, lists
-        # or tuples of that length; anything else goes the general way
-        checks = [(k, (k,)) for k in sizes]
-        where_p = names.index("p") if spec.takes_parameters else -1
-
-        def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
-            args = _plain_arguments(state, params, spec.takes_parameters, checks)
-            if args is None:
-                return None
-            arrays, addresses = buffers()
-            try:
-                for buffer, a in zip(arrays, args, strict=False):
-                    buffer[:] = a
-            except OverflowError:
-                return None  # an int beyond float64: the general path explains
-            if where_p >= 0 and not _parameters_hold(rules, arrays[where_p]):
-                return None  # the general path names the parameter
-            status = single(*addresses)
-            if status:
-                raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
-            return arrays[-1].reshape(out_shape).copy()
+    fast = _fast_caller(spec, single, buffers, sizes, rules) if spec.one_state_fast else None
 
     def call(state, p, t, u, out=None):
         if spec.takes_parameters and p.ndim != 1:
@@ -352,6 +330,41 @@ def c_raw(
         return _batch(batch, call_single, spec, sizes, values, lead, out)
 
     return call, fast
+
+
+def _fast_caller(
+    spec: LoweredFunction,
+    single: Any,
+    buffers: Callable[[], tuple[list[np.ndarray], list[int]]],
+    sizes: Sequence[int],
+    rules: Sequence[ParameterRule],
+) -> Fast:
+    """The fast single-state caller of :func:`c_raw` (a function of the state and the
+    parameters only): plain float64 (or int64) vectors of the right length, lists or
+    tuples of that length, written into the thread's buffers; anything else (and a
+    parameter outside its rule) returns None, so the general path explains."""
+    checks = [(k, (k,)) for k in sizes]
+    where_p = spec.arguments.index("p") if spec.takes_parameters else -1
+    out_shape = spec.out_shape
+
+    def fast(state: tuple[object, ...], params: object) -> np.ndarray | None:
+        args = _plain_arguments(state, params, spec.takes_parameters, checks)
+        if args is None:
+            return None
+        arrays, addresses = buffers()
+        try:
+            for buffer, a in zip(arrays, args, strict=False):
+                buffer[:] = a
+        except OverflowError:
+            return None  # an int beyond float64: the general path explains
+        if where_p >= 0 and not _parameters_hold(rules, arrays[where_p]):
+            return None  # the general path names the parameter
+        status = single(*addresses)
+        if status:
+            raise _failed(spec.name, None, _STATUS.get(status, f"status {status}"))
+        return arrays[-1].reshape(out_shape).copy()
+
+    return fast
 
 
 def _batch(
