@@ -26,7 +26,15 @@ import numpy as np
 from symmech.codegen.backends import environment, templates_used
 from symmech.codegen.build import compile_library, load_library
 from symmech.gait import evaluation
-from symmech.gait.stride_map import GaitError, StrideOptions, StrideResult
+from symmech.gait.stride_map import (
+    GaitError,
+    StrideOptions,
+    StrideResult,
+    grazing_message,
+    max_events_message,
+    no_event_message,
+    step_small_message,
+)
 from symmech.simulate.steppers import Dop853, c_tableau
 
 __all__ = ["NativeStride", "stride_library_source"]
@@ -227,17 +235,13 @@ class NativeStride:
         gait = self.fns.gait
         names = self.fns.mode_names
         if status == "step_small":
-            return f"mode {names[int(d[0])]!r}: step size too small at t = {d[1]:.6g}"
+            return step_small_message(names[int(d[0])], d[1])
         if status == "no_event":
-            return (
-                f"mode {names[int(d[0])]!r}: no transition fired within t_max ="
-                f" {options.t_max} from t = {d[1]:.6g}"
-            )
+            return no_event_message(names[int(d[0])], options.t_max, d[1])
         if status == "grazing":
-            label = gait.transitions[int(d[0])].label
-            return f"transition {label!r}: the guard is grazed (Dg f = 0)"
+            return grazing_message(gait.transitions[int(d[0])].label)
         if status == "max_events":
-            return f"stride: transition {section} did not fire again in {options.max_events} events"
+            return max_events_message(section, options.max_events)
         if status == "call":
             which, index, code = CALLS[int(d[0])], int(d[1]), int(d[2])
             owner = (

@@ -103,6 +103,30 @@ class StrideResult:
     trajectory: np.ndarray | None = None
 
 
+# -- the failures of a stride, in the words both loops use (here and gait.native) --------
+def step_small_message(mode: str, t: Any) -> str:
+    """A step below the resolution of t in ``mode``."""
+    return f"mode {mode!r}: step size too small at t = {float(t):.6g}"
+
+
+def no_event_message(mode: str, t_max: float, t0: Any, y0: Any = None) -> str:
+    """No transition out of ``mode`` within ``t_max`` from ``t0`` (and ``y0``)."""
+    state = "" if y0 is None else f" (state {[float(x) for x in y0]})"
+    return (
+        f"mode {mode!r}: no transition fired within t_max = {t_max} from t = {float(t0):.6g}{state}"
+    )
+
+
+def grazing_message(label: str) -> str:
+    """The guard of transition ``label`` reached with ``Dg f = 0``."""
+    return f"transition {label!r}: the guard is grazed (Dg f = 0)"
+
+
+def max_events_message(section: int, max_events: int) -> str:
+    """The section transition not reached again within ``max_events`` events."""
+    return f"stride: transition {section} did not fire again in {max_events} events"
+
+
 def _stepper(fns: GaitFunctions) -> Stepper:
     return GaussLegendre(8) if fns.multiprecision else Dop853()
 
@@ -222,7 +246,7 @@ def _flow_until_event(fns, mode, t0, z0, columns, opts, stats):
         if not step.error <= 1:
             h = _controller(h, step.error, order, fns)
             if abs(h) <= 16 * fns.eps * max(abs(t), 1):
-                raise GaitError(f"mode {mode!r}: step size too small at t = {float(t):.6g}")
+                raise GaitError(step_small_message(mode, t))
             continue
         stats["steps"] += 1
         y_end = step.y[:N]
@@ -239,10 +263,7 @@ def _flow_until_event(fns, mode, t0, z0, columns, opts, stats):
         t, z, f, values = t + h, step.y, step.f, values_end
         h = _controller(h, step.error, order, fns)
     stats["nfev"] += flow.nfev
-    raise GaitError(
-        f"mode {mode!r}: no transition fired within t_max = {opts.t_max} from t = {float(t0):.6g}"
-        f" (state {[float(x) for x in z0[:N]]})"
-    )
+    raise GaitError(no_event_message(mode, opts.t_max, t0, z0[:N]))
 
 
 def _record(fns: GaitFunctions, stats: dict[str, Any], t: Any, mode: str, y: np.ndarray) -> None:
@@ -268,7 +289,7 @@ def saltation(
     Dg = fns.guard_gradient(k, y_minus)
     rate = Dg.dot(f_minus)
     if rate == 0:
-        raise GaitError(f"transition {tr.label!r}: the guard is grazed (Dg f = 0)")
+        raise GaitError(grazing_message(tr.label))
     Xi = DR + np.outer(f_plus - DR.dot(f_minus), Dg) / rate
     return y_plus, Xi, np.outer(f_plus, Dg) / rate
 
@@ -350,4 +371,4 @@ def stride(
             return StrideResult(
                 y, Phi, t, events, stats["nfev"], stats["steps"], monodromy, trajectory
             )
-    raise GaitError(f"stride: transition {section} did not fire again in {opts.max_events} events")
+    raise GaitError(max_events_message(section, opts.max_events))
