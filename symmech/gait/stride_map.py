@@ -294,6 +294,31 @@ def saltation(
     return y_plus, Xi, np.outer(f_plus, Dg) / rate
 
 
+def _start(fns: GaitFunctions, section: int, x0: Any) -> tuple[str, np.ndarray]:
+    """The mode a stride starts in (the section's target) and ``x0`` as an array of its
+    size, or a GaitError naming what is wrong."""
+    gait = fns.gait
+    whole = isinstance(section, (int, np.integer)) and not isinstance(section, bool)
+    if not (whole and 0 <= section < len(gait.transitions)):
+        raise GaitError(
+            f"stride: section {section!r} is not a transition of gait {gait.name!r}"
+            f" (0 .. {len(gait.transitions) - 1})"
+        )
+    mode = gait.transitions[section].target
+    try:
+        x = fns.array(x0)
+    except (TypeError, ValueError) as exc:
+        raise GaitError(
+            f"stride: the initial state {x0!r} is not an array of numbers ({exc})"
+        ) from None
+    if x.shape != (fns.size(mode),):
+        raise GaitError(
+            f"stride: the state after {gait.transitions[section].label!r} has"
+            f" {fns.size(mode)} entries (q, v of mode {mode!r}), got shape {x.shape}"
+        )
+    return mode, x
+
+
 def stride(
     fns: GaitFunctions,
     section: int,
@@ -316,24 +341,7 @@ def stride(
         raise GaitError(f"stride: loop must be 'auto' or 'python', got {loop!r}")
     opts = options or StrideOptions()
     gait = fns.gait
-    whole = isinstance(section, (int, np.integer)) and not isinstance(section, bool)
-    if not (whole and 0 <= section < len(gait.transitions)):
-        raise GaitError(
-            f"stride: section {section!r} is not a transition of gait {gait.name!r}"
-            f" (0 .. {len(gait.transitions) - 1})"
-        )
-    mode = gait.transitions[section].target
-    try:
-        x0 = fns.array(x0)
-    except (TypeError, ValueError) as exc:
-        raise GaitError(
-            f"stride: the initial state {x0!r} is not an array of numbers ({exc})"
-        ) from None
-    if x0.shape != (fns.size(mode),):
-        raise GaitError(
-            f"stride: the state after {gait.transitions[section].label!r} has"
-            f" {fns.size(mode)} entries (q, v of mode {mode!r}), got shape {x0.shape}"
-        )
+    mode, x0 = _start(fns, section, x0)
     native = fns.native_stride() if loop == "auto" else None
     if native is not None:
         if not np.all(np.isfinite(x0)):
