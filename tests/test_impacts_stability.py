@@ -9,11 +9,13 @@ import sympy as sp
 from test_impacts_support import impact_map
 
 import symmech as sm
-from symmech.algebra.stability import stable_coefficient, stable_linear
+from symmech.algebra.stability import stable_coefficient, stable_entry, stable_linear
+from symmech.algebra.zero import evidently_nonzero
 from symmech.impacts import derive_impact_map
 
 I, m, R, k, a, b, x, y = sp.symbols("I m R k a b x y", positive=True)
 theta = sp.Symbol("theta", real=True)
+phi = sp.Symbol("phi", real=True)
 
 
 def rel_err(value: float, exact) -> float:
@@ -35,6 +37,35 @@ def test_text001_rebound_coefficient():
 
 def test_one_minus_a_fraction():
     assert stable_coefficient(1 - x / (x + y)) == y / (x + y)
+
+
+def test_a_product_over_a_radical_of_the_state_is_written_stably():
+    """A wall's gradient (the ellipse's support function), as a product or as a flat sum:
+    (a^2 - b^2) sin cos / root becomes (a - b)(a + b) sin cos / root."""
+    root = sp.sqrt(a**2 * sp.cos(theta) ** 2 + b**2 * sp.sin(theta) ** 2)
+    expr = (a**2 - b**2) * sp.sin(theta) * sp.cos(theta) / root
+    for written in (expr, sp.expand(expr)):
+        stable = stable_entry(written, state=(theta,))
+        assert stable.has(a - b) and stable.has(a + b)
+        assert sp.simplify(stable - expr) == 0
+
+
+def test_a_sum_over_a_radical_of_the_state_is_kept_or_proven_zero():
+    """A sum of products of sums over a radical of the state (the bicycle's rolling
+    constraints) is kept as written: over a common denominator, expanded, it would grow;
+    one that is identically zero (by the circle relation here, which cancel does not
+    know) becomes 0."""
+    root = sp.sqrt(2 + sp.sin(theta) * sp.cos(phi))
+    kept = a * sp.sin(theta) * sp.cos(phi) + b * (sp.cos(theta) + sp.sin(phi)) ** 2 / root
+    assert stable_entry(kept, state=(theta, phi)) == kept
+    assert sp.count_ops(stable_coefficient(kept, state=(theta, phi))) > sp.count_ops(kept)
+    zero = (
+        a * (sp.cos(phi) + 1) / root
+        - a * (sp.cos(phi) + 1) * (sp.sin(theta) ** 2 + sp.cos(theta) ** 2) / root
+    )
+    assert isinstance(zero, sp.Add) and zero != 0
+    assert stable_entry(zero, state=(theta, phi)) == 0
+    assert evidently_nonzero(kept) and not evidently_nonzero(zero)
 
 
 def test_state_monomials_get_factored_coefficients():

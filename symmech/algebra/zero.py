@@ -39,7 +39,7 @@ from symmech.algebra.numeric import vanishes
 from symmech.algebra.opcount import count_ops
 from symmech.algebra.sampling import sample_points
 
-__all__ = ["ZeroVerdict", "is_zero", "zero_verdict"]
+__all__ = ["ZeroVerdict", "evidently_nonzero", "is_zero", "zero_verdict"]
 
 #: Sample points of route 4 when the caller gives none.
 _SAMPLES = 4
@@ -95,3 +95,12 @@ def is_zero(expr: sp.Basic, points: Sequence[Mapping] | None = None) -> bool | N
     """True when ``expr`` is identically zero, False when it is not, None when it cannot
     be evaluated (see :func:`zero_verdict`)."""
     return zero_verdict(expr, points).zero
+
+
+def evidently_nonzero(expr: sp.Basic) -> bool:
+    """True when ``expr`` is non-zero at one random rational point (50-digit evaluation,
+    :func:`symmech.algebra.numeric.vanishes`): then it is not identically zero.  False
+    says nothing; its cost is one walk of the tree, a small part of :func:`is_zero`'s, so
+    callers that expect a non-zero try it first."""
+    e = sp.sympify(expr, strict=True)
+    return vanishes(e, sample_points(_atoms(e), count=1, seed=_SEED)) is False

@@ -48,7 +48,7 @@ from sympy.core.function import AppliedUndef
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.opcount import count_ops
-from symmech.algebra.stability import stable_coefficient
+from symmech.algebra.stability import stable_entry
 from symmech.algebra.walk import atoms
 from symmech.codegen.blocks import (
     BATCH_SUFFIX,
@@ -478,7 +478,7 @@ def _build(
             and not (out.free_symbols & velocity_set)
             and count_ops(out) <= limits.STABLE_ENTRY_OPS
         ):
-            out = stable_coefficient(out, state)
+            out = stable_entry(out, state)
         prepared[e] = out
         return out
 
