@@ -171,18 +171,7 @@ def compile_library(
         if not c_files:
             raise CompileError("no .c file to compile")
         target = work / library.name
-        cmd = [cc, *flags, "-o", str(target), *c_files, "-lm"]
-        try:
-            result = subprocess.run(
-                cmd, cwd=work, capture_output=True, text=True, timeout=600, check=False
-            )
-        except (OSError, subprocess.TimeoutExpired) as exc:
-            raise CompileError(f"running {' '.join(cmd)} failed: {exc}") from None
-        if result.returncode != 0:
-            raise CompileError(
-                f"{' '.join(cmd)} failed with exit code {result.returncode}:\n"
-                + (result.stderr or result.stdout).strip()
-            )
+        _build(cc, list(flags), c_files, target, work)
         digest = work / (library.name + ".sha256")
         digest.write_text(_sha256(target), encoding="utf-8")
         try:
@@ -194,6 +183,64 @@ def compile_library(
                 " that name that this user may not replace: use a private cache folder)"
             ) from None
     return library
+
+
+def _build(cc: str, flags: list[str], c_files: list[str], target: Path, work: Path) -> None:
+    """Compile ``c_files`` (in ``work``) and link them into ``target``.  With several
+    files and several CPUs each is compiled to an object file by its own compiler
+    process, at once, then linked (the library and its CPython extension compile side by
+    side); otherwise one compiler run does both."""
+    if len(c_files) < 2 or _cpus() < 2:
+        _run([cc, *flags, "-o", str(target), *c_files, "-lm"], work)
+        return
+    objects = [f"{name[:-2]}.o" for name in c_files]
+    compiles: list[tuple[list[str], subprocess.Popen]] = []
+    try:
+        for name, obj in zip(c_files, objects, strict=True):
+            compiles.append(_start([cc, *flags, "-c", "-o", obj, name], work))
+        for cmd, process in compiles:
+            _finish(cmd, process)
+    finally:
+        for _, process in compiles:  # (after a failure: the others are not waited for)
+            if process.poll() is None:
+                process.kill()
+                process.communicate()
+    _run([cc, *flags, "-o", str(target), *objects, "-lm"], work)
+
+
+def _cpus() -> int:
+    """The CPUs this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1  # pragma: no cover - platforms without affinity
+
+
+def _start(cmd: list[str], work: Path) -> tuple[list[str], subprocess.Popen]:
+    try:
+        return cmd, subprocess.Popen(
+            cmd, cwd=work, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        )
+    except OSError as exc:
+        raise CompileError(f"running {' '.join(cmd)} failed: {exc}") from None
+
+
+def _finish(cmd: list[str], process: subprocess.Popen) -> None:
+    """Wait for a compiler run (at most 600 s); a failure is a :class:`CompileError` with
+    the compiler's message."""
+    try:
+        out, err = process.communicate(timeout=600)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.communicate()
+        raise CompileError(f"running {' '.join(cmd)} failed: timed out after 600 s") from None
+    if process.returncode != 0:
+        raise CompileError(
+            f"{' '.join(cmd)} failed with exit code {process.returncode}:\n" + (err or out).strip()
+        )
+
+
+def _run(cmd: list[str], work: Path) -> None:
+    _finish(*_start(cmd, work))
 
 
 def _digest_path(library: Path) -> Path:
