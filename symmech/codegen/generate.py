@@ -210,12 +210,7 @@ def generate(
         "macro": re.sub(r"\W", "_", stem.upper()),
     }
     env = environment()
-    files = {
-        filename: env.get_template(template).render(
-            stamp=_stamp(__version__, templates_used(template)), **context
-        )
-        for template, filename in backend.templates_to_render(stem)
-    }
+    files = _render_files(backend.templates_to_render(stem), context, target == "c")
     extension = ""
     if target == "c" and any(f.one_state_fast for f in lowered):
         extension = env.get_template(EXTENSION_TEMPLATE).render(
@@ -247,6 +242,64 @@ def generate(
         parameter_rules=rules,
         extension=extension,
     )
+
+
+#: A C source whose functions print more characters than this is written as two files
+#: (the second ``{stem}_2.c``) of about equal size, which
+#: :func:`~symmech.codegen.build.compile_library` compiles side by side: the compiler's
+#: time grows with a file's size, and it runs on one CPU per file.  (The Whipple
+#: bicycle's functions print about 160,000 characters; its ``rhs`` alone about 50,000,
+#: almost all of it ``acceleration``, which is not split.)
+SPLIT_SOURCE_CHARACTERS = 60_000
+
+
+def _render_files(
+    templates: Sequence[tuple[str, str]], context: Mapping, split: bool
+) -> dict[str, str]:
+    """The files of the templates rendered with ``context``; with ``split`` (C), a source
+    whose functions are larger than :data:`SPLIT_SOURCE_CHARACTERS` as two files, the
+    functions in their order, the parameter checks in the first."""
+    from symmech import __version__
+
+    env = environment()
+    files: dict[str, str] = {}
+    for template, filename in templates:
+        stamp = _stamp(__version__, templates_used(template))
+        parts = _source_parts(context["functions"]) if split and filename.endswith(".c") else []
+        if len(parts) < 2:
+            files[filename] = env.get_template(template).render(stamp=stamp, **context)
+            continue
+        for k, part in enumerate(parts):
+            name = filename if k == 0 else f"{filename[:-2]}_{k + 1}.c"
+            own = {
+                **context,
+                "functions": part,
+                "rules": context["rules"] if k == 0 else [],
+                "scaled": any(f.scaled for f in part),
+            }
+            files[name] = env.get_template(template).render(stamp=stamp, **own)
+    return files
+
+
+def _source_parts(functions: Sequence[LoweredFunction]) -> list[list[LoweredFunction]]:
+    """``functions`` in one part, or in two consecutive parts of about equal printed size
+    when they print more than :data:`SPLIT_SOURCE_CHARACTERS` characters."""
+    sizes = [
+        sum(len(e) for _, e in f.temporaries)
+        + sum(len(a[2]) for a in f.assignments)
+        + sum(len(line) for line in f.solve)
+        for f in functions
+    ]
+    total = sum(sizes)
+    if total <= SPLIT_SOURCE_CHARACTERS or len(functions) < 2:
+        return [list(functions)]
+    running, cut = 0, 1
+    for k, size in enumerate(sizes[:-1]):
+        running += size
+        cut = k + 1
+        if 2 * running >= total:
+            break
+    return [list(functions[:cut]), list(functions[cut:])]
 
 
 def _parameter_rules(scene: Scene, plan: ScenePlan) -> tuple[ParameterRule, ...]:
