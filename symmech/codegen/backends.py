@@ -64,6 +64,10 @@ STEP_DOCS = {
     "constrained_multipliers": (
         "Cholesky solves of M and of C = mu M^-1 mu^T: out = lambda = C^-1 (-rate - mu M^-1 f)"
     ),
+    "constrained_dynamics": (
+        "Cholesky solves of M and of C = mu M^-1 mu^T: lambda = C^-1 (-rate - mu M^-1 f),"
+        " out = (M^-1 (f + mu^T lambda), lambda)"
+    ),
     "impact_kkt": (
         "the impulse-momentum system by Cholesky solves of M and of G = A M^-1 A^T:"
         " out = v + M^-1 A^T G^-1 (b - A v)"

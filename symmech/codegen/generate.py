@@ -23,8 +23,9 @@ import sympy as sp
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
 from symmech.codegen.escape import file_name
 from symmech.codegen.lower import LoweredFunction, Memo, Names, lower
-from symmech.codegen.plan import Block, CodegenError, ScenePlan, build_plan
+from symmech.codegen.plan import Block, CodegenError, FunctionPlan, ScenePlan, build_plan
 from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
+from symmech.codegen.sharing import share_constrained_solve
 from symmech.declaration.symbols import t as TIME
 from symmech.files import write_text_atomic
 
@@ -151,11 +152,10 @@ def generate(
     plan = _with_metric_checks(scene, plan, constants, definitions)
     rules = _parameter_rules(scene, plan)
     names = Names.of(plan)
-    done: dict[str, LoweredFunction] = {}
     memo = Memo()
-    for f in plan.functions:
-        callee = done[f.calls] if f.calls is not None else None
-        done[f.name] = lower(
+
+    def lower_one(f: FunctionPlan, callee: LoweredFunction | None) -> LoweredFunction:
+        return lower(
             f,
             plan,
             names,
@@ -166,6 +166,12 @@ def generate(
             scalar=backend.scalar,
             memo=memo,
         )
+
+    done: dict[str, LoweredFunction] = {}
+    for f in plan.functions:
+        called = f.calls or (f.part_of[0] if f.part_of else None)
+        done[f.name] = lower_one(f, done[called] if called is not None else None)
+    plan, done = share_constrained_solve(plan, done, lower_one)
     lowered = tuple(done.values())
     omitted = (*plan.omitted, *_argument_notes(plan, lowered))
     stem = f"symmech_{file_name(scene.name)}"
@@ -284,12 +290,7 @@ def _render_files(
 def _source_parts(functions: Sequence[LoweredFunction]) -> list[list[LoweredFunction]]:
     """``functions`` in one part, or in two consecutive parts of about equal printed size
     when they print more than :data:`SPLIT_SOURCE_CHARACTERS` characters."""
-    sizes = [
-        sum(len(e) for _, e in f.temporaries)
-        + sum(len(a[2]) for a in f.assignments)
-        + sum(len(line) for line in f.solve)
-        for f in functions
-    ]
+    sizes = [f.printed_characters for f in functions]
     total = sum(sizes)
     if total <= SPLIT_SOURCE_CHARACTERS or len(functions) < 2:
         return [list(functions)]
@@ -344,7 +345,7 @@ def _argument_notes(plan: ScenePlan, lowered: Sequence[LoweredFunction]) -> list
 
 
 #: Closed forms that hold the inverse metric: their metric is checked at run time.
-METRIC_KINDS = ("acceleration", "multipliers", "impact", "projectors", "jacobian")
+METRIC_KINDS = ("acceleration", "multipliers", "dynamics", "impact", "projectors", "jacobian")
 
 
 def _with_metric_checks(

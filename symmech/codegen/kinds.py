@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from symmech.impacts import ImpactMap
     from symmech.scene import Scene
 
-__all__ = ["SCENE_BUILDERS", "WALL_BUILDERS", "BuildContext"]
+__all__ = ["DYNAMICS_DOC", "DYNAMICS_EQUATION", "SCENE_BUILDERS", "WALL_BUILDERS", "BuildContext"]
 
 
 @dataclass
@@ -118,6 +118,45 @@ def _forcing(c: BuildContext) -> None:
         )
     if "forcing" in c.wanted or c.needs_acceleration:
         c.omitted.extend(forcing_notes(c.f, c.scene.velocities, c.scene.frame is not None))
+
+
+def _dynamics(c: BuildContext) -> None:
+    """``dynamics``: out = (v_dot, lambda), by one solve or, for ``closed_form``, as the
+    closed forms (``acceleration`` and ``multipliers`` become its parts when their code is
+    large: :mod:`symmech.codegen.sharing`)."""
+    n, m = c.n, c.m
+    if "dynamics" not in c.wanted or not m:
+        return
+    if c.closed:
+        both = sp.Matrix(c.scene.acceleration()).col_join(sp.Matrix(c.scene.multipliers()))
+        c.add(
+            "dynamics",
+            "dynamics",
+            "acceleration v_dot and Lagrange multipliers lambda (closed forms)",
+            "out = (v_dot, lambda), lambda = C^-1 (-mu_dot v - mu g^-1 f) (Carnot 2.2)",
+            ("q", "v"),
+            [vector_block("out", both)],
+            (n + m,),
+        )
+        return
+    c.add(
+        "dynamics",
+        "dynamics",
+        DYNAMICS_DOC,
+        DYNAMICS_EQUATION,
+        ("q", "v"),
+        c.constrained_blocks(),
+        (n + m,),
+        step="constrained_dynamics",
+        step_args=(n, m, c.diag),
+    )
+
+
+#: What ``dynamics`` (one solve) computes, for its header (also when made by sharing).
+DYNAMICS_DOC = "acceleration v_dot and Lagrange multipliers lambda, one solve in the code"
+DYNAMICS_EQUATION = (
+    "g v_dot = f + mu^T lambda, mu v_dot = -mu_dot v; out = (v_dot, lambda) (Carnot paper eq. 5)"
+)
 
 
 def _acceleration(c: BuildContext) -> None:
@@ -217,7 +256,7 @@ def _constrained(c: BuildContext) -> None:
     n, m = c.n, c.m
     if not m:
         c.omitted.append(
-            "multipliers, constraint residual, projectors: the scene has no constraints"
+            "dynamics, multipliers, constraint residual, projectors: the scene has no constraints"
         )
         return
     if "multipliers" in c.wanted:
@@ -287,6 +326,7 @@ def _extra(c: BuildContext) -> None:
 SCENE_BUILDERS: tuple[Callable[[BuildContext], None], ...] = (
     _mass_matrix,
     _forcing,
+    _dynamics,
     _acceleration,
     _rhs,
     _jacobian,

@@ -24,6 +24,7 @@ and printed by the backend's :class:`~symmech.codegen.unroll.Dialect`:
 ``constrained_acceleration``  ``X = M^-1 [mu^T | f]``, ``C = mu X_mu``,
                               ``lambda = C^-1 (-rate - mu X_f)``, ``out = X_f + X_mu lambda``
 ``constrained_multipliers``   the same, ``out = lambda``
+``constrained_dynamics``      the same, ``out = (X_f + X_mu lambda, lambda)``
 ``impact_kkt``                ``Y = M^-1 A^T``, ``G = A Y``, ``r = b - A v`` with
                               ``b = (0_m, -alpha dpsi(v) - (1 + alpha) psi_t, nu V)``,
                               ``nu V = -psi_t G[i, m] / G[m, m]``, ``out = v + Y G^-1 r``
@@ -70,7 +71,7 @@ from symmech.codegen.printers import (
     product_power,
     safe_rewrite,
 )
-from symmech.codegen.unroll import STEP_INPUTS, Program, trace_step
+from symmech.codegen.unroll import CONSTRAINED_STEPS, STEP_INPUTS, Program, trace_step
 from symmech.declaration.symbols import t as TIME
 
 __all__ = ["LoweredFunction", "Memo", "Names", "lower", "step_flops"]
@@ -126,6 +127,8 @@ class LoweredFunction:
     calls: str | None
     out_shape: tuple[int, ...]
     out_size: int
+    #: (name, offset): ``out`` is entries offset ... of that function's (no body of its own)
+    part_of: tuple[str, int] | None
     operations: int
     n_temporaries: int
     solve_flops: int = 0  # operations of the unrolled step (symmech.codegen.unroll)
@@ -136,6 +139,15 @@ class LoweredFunction:
     scaled: bool = False  # evaluated for v / 2^e and scaled back (a static wall's impact)
     #: the one-state variant's body (NumPy backend: plain floats, ``math``), or None
     scalar: tuple[str, ...] | None = None
+
+    @property
+    def printed_characters(self) -> int:
+        """The characters of its printed body: temporaries, entries and unrolled solve."""
+        return (
+            sum(len(text) for _, text in self.temporaries)
+            + sum(len(a[2]) for a in self.assignments)
+            + sum(len(line) for line in self.solve)
+        )
 
     @property
     def one_state_fast(self) -> bool:
@@ -201,11 +213,11 @@ def step_flops(step: str | None, args: tuple[int, ...]) -> int:
     if step == "spd_solve":
         n, diag = args
         return _factor_flops(n, diag) + _factor_solve_flops(n, diag, 1)
-    if step in ("constrained_acceleration", "constrained_multipliers"):
+    if step in CONSTRAINED_STEPS:
         n, m, diag = args
         out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, m + 1)
         out += 2 * n * m * m + 2 * n * m + _cholesky_flops(m) + 2 * m * m
-        return out + (2 * n * m if step == "constrained_acceleration" else 0)
+        return out + (2 * n * m if step != "constrained_multipliers" else 0)
     if step == "impact_kkt":
         n, k, m, diag = args
         out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, k)
@@ -376,8 +388,9 @@ def lower(
     (:func:`_scalar_body`).  ``memo`` carries what the functions of one scene share
     (:class:`Memo`; a fresh one when omitted)."""
     memo = memo if memo is not None else Memo()
-    if f.calls is not None and (callee is None or callee.name != f.calls):
-        raise CodegenError(f"{f.name} calls {f.calls}: lower it first and pass it as callee")
+    target = f.calls or (f.part_of[0] if f.part_of else None)
+    if target is not None and (callee is None or callee.name != target):
+        raise CodegenError(f"{f.name} calls {target}: lower it first and pass it as callee")
     entries: list[sp.Expr] = []
     where: list[tuple[str, int, tuple[int, ...]]] = []
     for b in f.blocks:
@@ -495,7 +508,7 @@ def lower(
         assignments = printed
         blocks = tuple((b.name, b.size) for b in f.blocks if b.name != "out")
         block_shapes = tuple((b.name, b.shape) for b in f.blocks)
-    if f.calls is not None:
+    if target is not None:
         read |= {"q", "v"}
     unused = tuple(arg for arg in f.state if arg != "y" and arg not in read)
     # the arguments p, t, u are taken when the printed code reads them (an unrolled solve
@@ -515,6 +528,9 @@ def lower(
         )
     if check:
         cost += f"; metric check: {flops} flops"
+    if f.part_of is not None and callee is not None:  # its cost is the whole's
+        cost = f"Entries {f.part_of[1]} ... {f.part_of[1] + f.out_size - 1} of {callee.name}"
+        ops, flops = callee.operations, callee.solve_flops
     if callee is not None:
         cost += f"; then the call of {callee.name}: {callee.operations} operations"
         if callee.solve_flops:
@@ -547,6 +563,7 @@ def lower(
         calls=f.calls,
         out_shape=f.out_shape,
         out_size=f.out_size,
+        part_of=f.part_of,
         operations=ops,
         n_temporaries=len(replacements),
         solve_flops=flops,
@@ -580,6 +597,10 @@ def _scalar_body(
     make_printer, dialect = scalar
     if callee is not None and callee.scalar is None:
         return None
+    if f.part_of is not None and callee is not None:
+        start = f.part_of[1]
+        whole = f"_one_{callee.name}({', '.join(callee.arguments)})"
+        return (f"out = {whole}[{start}:{start + f.out_size}]",)
     if (program is None or check) and any(blk not in ("out", "M") for blk, _, _ in where):
         return None  # a local block other than the output
     printer = make_printer(table)

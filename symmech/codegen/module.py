@@ -385,6 +385,19 @@ class SceneModule:
         """The Lagrange multipliers lambda (constrained scenes)."""
         return self.call("multipliers", q, v, params=params, t=t, inputs=inputs, out=out)
 
+    def dynamics(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        params: Params = None,
+        *,
+        t: ArrayLike | None = None,
+        inputs: Inputs = None,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """(v_dot, lambda) from one solve of the constrained system (constrained scenes)."""
+        return self.call("dynamics", q, v, params=params, t=t, inputs=inputs, out=out)
+
     def constraint_residual(
         self,
         q: ArrayLike,

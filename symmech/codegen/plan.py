@@ -85,7 +85,13 @@ STRATEGIES = ("auto", "closed_form", "linear_solve")
 
 #: Linear-algebra steps a backend implements (see the module docstring of
 #: :mod:`symmech.codegen.lower` for their exact equations).
-STEPS = ("spd_solve", "constrained_acceleration", "constrained_multipliers", "impact_kkt")
+STEPS = (
+    "spd_solve",
+    "constrained_acceleration",
+    "constrained_multipliers",
+    "constrained_dynamics",
+    "impact_kkt",
+)
 
 #: Function kinds a user may ask for (``functions=``); wall functions are per wall.
 FUNCTIONS = (
@@ -95,6 +101,7 @@ FUNCTIONS = (
     "rhs",
     "energy",
     "multipliers",
+    "dynamics",
     "constraint_residual",
     "psi",
     "dpsi",
@@ -116,7 +123,9 @@ class FunctionPlan:
     ``p`` appear.  The function evaluates ``blocks`` and then either returns the block
     named ``"out"`` (``step is None``) or runs ``step`` on the blocks (``step_args`` are
     the integer sizes it needs), writing ``out_shape`` entries.  ``calls`` names another
-    function whose result fills the tail of ``out`` (``rhs`` calls ``acceleration``).
+    function whose result fills the tail of ``out`` (``rhs`` calls ``acceleration``);
+    ``part_of`` = (name, offset): the function has no blocks, its ``out`` is entries
+    ``offset ...`` of another's (``acceleration`` and ``multipliers`` of ``dynamics``).
     ``wall`` and ``wall_index`` name the wall of a per-wall function (psi, dpsi, psi_t,
     impact).
     """
@@ -131,6 +140,7 @@ class FunctionPlan:
     step: str | None = None
     step_args: tuple[int, ...] = ()
     calls: str | None = None
+    part_of: tuple[str, int] | None = None
     wall: str | None = None
     wall_index: int | None = None
     uses_time: bool = False
@@ -391,7 +401,9 @@ def build_plan(
     takes ``linear_solve`` and says so in ``omitted`` and :attr:`ScenePlan.fallback`;
     ``"closed_form"`` raises :class:`CodegenError` naming the stage and the budget.
     ``functions`` restricts the kinds
-    emitted (names from :data:`FUNCTIONS`).  ``constants`` bakes parameter values in
+    emitted (names from :data:`FUNCTIONS`; all but ``dynamics`` by default: ``dynamics``,
+    out = (v_dot, lambda) from one solve, is made by :mod:`symmech.codegen.sharing` when
+    acceleration and multipliers are large, or when asked for).  ``constants`` bakes parameter values in
     (folded into the expressions); the other parameters are run-time inputs ``p``.
     ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
     t and the parameters.  ``projectors`` adds P and Q (constrained scenes); ``jacobian``
@@ -419,6 +431,8 @@ def build_plan(
         wanted.add("jacobian")
     elif functions is None:
         wanted.discard("jacobian")
+    if functions is None:  # (made when acceleration and multipliers share their solve)
+        wanted.discard("dynamics")
     options = (wanted, constants or {}, definitions or {}, extra_functions(extra or {}))
     if strategy == "linear_solve" or (strategy == "auto" and scene.n > limits.CLOSED_FORM_MAX_N):
         return _build(scene, "linear_solve", *options)
@@ -503,6 +517,7 @@ def _build(
         step: str | None = None,
         step_args: tuple[int, ...] = (),
         calls: str | None = None,
+        part_of: tuple[str, int] | None = None,
         wall: str | None = None,
         wall_index: int | None = None,
     ) -> None:
@@ -510,8 +525,8 @@ def _build(
         syms: set = set().union(*[e.free_symbols for b in blocks for e in b.entries])
         slot_syms = set(inputs.slots.values())
         uses_t, uses_u, uses_p = TIME in syms, bool(syms & slot_syms), bool(syms & set(runtime))
-        if calls is not None:
-            callee = next(f for f in plans if f.name == calls)
+        if calls is not None or part_of is not None:
+            callee = next(f for f in plans if f.name in (calls, part_of and part_of[0]))
             uses_t |= callee.uses_time
             uses_u |= callee.uses_inputs
             uses_p |= callee.uses_parameters
@@ -531,6 +546,7 @@ def _build(
                 step=step,
                 step_args=step_args,
                 calls=calls,
+                part_of=part_of,
                 wall=wall,
                 wall_index=wall_index,
                 uses_time=uses_t,

@@ -330,10 +330,12 @@ def _constrained(
     f: Sequence[Value],
     mu: Matrix,
     rate: Sequence[Value],
-    acceleration: bool,
+    outputs: str,
 ) -> None:
     """sm_constrained: X = M^-1 [mu^T | f], C = mu X_mu, lambda = C^-1 (-rate - mu X_f),
-    acc = X_f + X_mu lambda (Carnot paper section 2.2)."""
+    acc = X_f + X_mu lambda (Carnot paper section 2.2); ``outputs``: ``"acceleration"``
+    (out = acc), ``"multipliers"`` (out = lambda) or ``"dynamics"`` (out = (acc,
+    lambda))."""
     F = _factor(prog, n, diag, M)
     X = [[mu(a, i) for a in range(m)] + [f[i]] for i in range(n)]
     _factor_solve(prog, F, X, "X")
@@ -348,17 +350,18 @@ def _constrained(
             C[a, b] = prog.let(f"C{a}_{b}", _dot_from_zero([(mu(a, i), X[i][b]) for i in range(n)]))
     FC = _cholesky(prog, m, lambda i, j: C[i, j], "Lc", "the Gram matrix C = mu M^-1 mu^T")
     _cholesky_solve(prog, FC, lam, "lam")
-    if acceleration:
+    prog.out_size = 0
+    if outputs in ("acceleration", "dynamics"):
         for i in range(n):
             s = X[i][m]
             for a in range(m):
                 s = add(s, mul(X[i][a], lam[a][0]))
             prog.statements.append(("out", i, s))
         prog.out_size = n
-    else:
+    if outputs in ("multipliers", "dynamics"):
         for a in range(m):
-            prog.statements.append(("out", a, lam[a][0]))
-        prog.out_size = m
+            prog.statements.append(("out", prog.out_size + a, lam[a][0]))
+        prog.out_size += m
 
 
 def _impact_kkt(
@@ -433,11 +436,19 @@ def _prune(statements: list[tuple]) -> list[tuple]:
     return kept
 
 
+#: The steps of the constrained equations of motion, and what each writes to ``out``.
+CONSTRAINED_STEPS = {
+    "constrained_acceleration": "acceleration",
+    "constrained_multipliers": "multipliers",
+    "constrained_dynamics": "dynamics",
+}
+
 #: Input block names of each step, in the order of the step's arguments.
 STEP_INPUTS = {
     "spd_solve": ("M", "f"),
     "constrained_acceleration": ("M", "f", "mu", "rate"),
     "constrained_multipliers": ("M", "f", "mu", "rate"),
+    "constrained_dynamics": ("M", "f", "mu", "rate"),
     "impact_kkt": ("M", "A", "s"),
 }
 
@@ -481,7 +492,7 @@ def trace_step(
     if step == "spd_solve":
         n, diag = args
         _spd_solve(body, n, bool(diag), matrix("M"), cells["f"])
-    elif step in ("constrained_acceleration", "constrained_multipliers"):
+    elif step in CONSTRAINED_STEPS:
         n, m, diag = args
         _constrained(
             body,
@@ -492,7 +503,7 @@ def trace_step(
             cells["f"],
             matrix("mu"),
             cells["rate"],
-            step == "constrained_acceleration",
+            CONSTRAINED_STEPS[step],
         )
     else:
         n, k, m, diag = args

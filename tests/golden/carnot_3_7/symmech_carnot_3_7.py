@@ -13,7 +13,7 @@ the result has shape (...) + the output shape.
 Left out of this file:
   - forcing: 18 of the 18 Christoffel symbols Gamma_k(ij) (symmetrised in i, j) are identically zero and are never computed
   - forcing: entries [0, 1, 2] are identically zero (no velocity or potential term); they are stored as 0.0 without computation
-  - multipliers, constraint residual, projectors: the scene has no constraints
+  - dynamics, multipliers, constraint residual, projectors: the scene has no constraints
   - psit_rough_wall: wall 'rough_wall' does not move (d psi/d t = 0)
   - linear-algebra routines: strategy closed_form evaluates closed forms
   - potential terms: V = 0
