@@ -16,7 +16,7 @@ from codegen_support import require_c_compiler
 import symmech as sm
 from symmech import codegen
 from symmech.codegen.dialects import NumPyDialect
-from symmech.codegen.lower import step_flops
+from symmech.codegen.flops import step_flops
 from symmech.codegen.unroll import trace_step
 
 

@@ -48,9 +48,9 @@ v, with the term of ``psi_t``, and is evaluated as it is).
 The steps are unrolled at generation time into straight-line code over the entries that
 are not exact constants (:mod:`symmech.codegen.unroll`: same operations in the same order
 as the loop algorithms, minus those whose result IEEE arithmetic fixes in advance, such as
-products with a structural zero); :func:`step_flops` counts the operations of the loop
-algorithm on a dense problem, the header of every function states the operations its
-unrolled code performs (``solve_flops``).
+products with a structural zero); :func:`symmech.codegen.flops.step_flops` counts the
+operations of the loop algorithm on a dense problem, the header of every function states
+the operations its unrolled code performs (``solve_flops``).
 """
 
 from __future__ import annotations
@@ -63,6 +63,7 @@ import sympy as sp
 
 from symmech.algebra.opcount import count_ops
 from symmech.codegen.dialects import Dialect
+from symmech.codegen.flops import step_flops, step_sizes
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
 from symmech.codegen.printers import (
     correctly_rounded,
@@ -71,10 +72,10 @@ from symmech.codegen.printers import (
     product_power,
     safe_rewrite,
 )
-from symmech.codegen.unroll import CONSTRAINED_STEPS, STEP_INPUTS, Program, trace_step
+from symmech.codegen.unroll import STEP_INPUTS, Program, trace_step
 from symmech.declaration.symbols import t as TIME
 
-__all__ = ["LoweredFunction", "Memo", "Names", "lower", "step_flops"]
+__all__ = ["LoweredFunction", "Memo", "Names", "lower"]
 
 
 @dataclass(frozen=True)
@@ -171,69 +172,6 @@ class LoweredFunction:
         ``y`` 2n, ``q`` and ``v`` n, ``p`` and ``u`` their counts."""
         size = {"y": 2 * n, "q": n, "v": n, "p": n_parameters, "t": 0, "u": n_inputs}
         return tuple(size[a] for a in self.arguments)
-
-
-# ---------------------------------------------------------------------- operation counts
-
-
-def _cholesky_flops(n: int) -> int:
-    """sm_cholesky: column j costs 2j + 2 (its diagonal, the sqrt and the reciprocal)
-    and 2j + 1 for each of the n - 1 - j rows below it."""
-    return sum(2 * j + 2 + (n - 1 - j) * (2 * j + 1) for j in range(n))
-
-
-def _factor_flops(n: int, diag: int) -> int:
-    """A diagonal metric is only checked (its solve divides by the diagonal)."""
-    return 0 if diag else _cholesky_flops(n)
-
-
-def _factor_solve_flops(n: int, diag: int, r: int) -> int:
-    """Forward and back substitution cost n^2 each per column; a diagonal metric n r
-    divisions."""
-    return n * r if diag else 2 * n * n * r
-
-
-def step_flops(step: str | None, args: tuple[int, ...]) -> int:
-    """Floating-point operations (+ - * / sqrt, one each) of a linear-algebra step as the
-    loop algorithm performs it on a dense problem with the sizes ``args`` of
-    :class:`~symmech.codegen.plan.FunctionPlan`: an upper bound of what the unrolled code
-    of :mod:`symmech.codegen.unroll` performs (it skips the operations on constants and,
-    in C = mu X_mu and G = A Y, the upper triangle that the factorisation never reads).
-
-    ``spd_solve`` (n, diag): factor and one solve.  ``constrained_*`` (n, m, diag): factor,
-    a solve with m + 1 columns, ``C = mu X_mu`` (2 n m^2) and ``mu X_f`` (2 n m), the
-    Cholesky factorisation of C and one solve (2 m^2), and for the acceleration
-    ``X_f + X_mu lambda`` (2 n m).  ``impact_kkt`` (n, k, m, diag): factor, a solve with
-    k columns, ``A v`` (2 n k), ``G = A Y`` (2 n k^2), the right-hand side (3 per row
-    from row m on), the Cholesky factorisation of G and one solve (2 k^2; for k = 1 one
-    division), and ``v + Y lambda`` (2 n k).
-    """
-    if step is None:
-        return 0
-    if step == "spd_solve":
-        n, diag = args
-        return _factor_flops(n, diag) + _factor_solve_flops(n, diag, 1)
-    if step in CONSTRAINED_STEPS:
-        n, m, diag = args
-        out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, m + 1)
-        out += 2 * n * m * m + 2 * n * m + _cholesky_flops(m) + 2 * m * m
-        return out + (2 * n * m if step != "constrained_multipliers" else 0)
-    if step == "impact_kkt":
-        n, k, m, diag = args
-        out = _factor_flops(n, diag) + _factor_solve_flops(n, diag, k)
-        out += 2 * n * k + 2 * n * k * k + 3 * (k - m)
-        out += 1 if k == 1 else _cholesky_flops(k) + 2 * k * k  # one row: r / G
-        return out + 2 * n * k
-    raise CodegenError(f"unknown linear-algebra step {step!r}")
-
-
-def _step_sizes(step: str, args: tuple[int, ...]) -> str:
-    diag = ", diagonal metric" if args[-1] else ""
-    if step == "spd_solve":
-        return f"n = {args[0]}{diag}"
-    if step == "impact_kkt":
-        return f"n = {args[0]}, k = {args[1]}{diag}"
-    return f"n = {args[0]}, m = {args[1]}{diag}"
 
 
 # ----------------------------------------------------------------------------- lowering
@@ -523,7 +461,7 @@ def lower(
     cost = f"Operations after CSE: {ops} (sympy.count_ops); temporaries: {len(replacements)}"
     if f.step:
         cost += (
-            f"; solve: {flops} flops ({_step_sizes(f.step, f.step_args)}; dense:"
+            f"; solve: {flops} flops ({step_sizes(f.step, f.step_args)}; dense:"
             f" {step_flops(f.step, f.step_args)})"
         )
     if check:

@@ -403,8 +403,9 @@ def build_plan(
     ``functions`` restricts the kinds
     emitted (names from :data:`FUNCTIONS`; all but ``dynamics`` by default: ``dynamics``,
     out = (v_dot, lambda) from one solve, is made by :mod:`symmech.codegen.sharing` when
-    acceleration and multipliers are large, or when asked for).  ``constants`` bakes parameter values in
-    (folded into the expressions); the other parameters are run-time inputs ``p``.
+    acceleration and multipliers are large, or when asked for).  ``constants`` bakes
+    parameter values in (folded into the expressions); the other parameters are run-time
+    inputs ``p``.
     ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
     t and the parameters.  ``projectors`` adds P and Q (constrained scenes); ``jacobian``
     adds the Jacobian d(rhs)/dy of the first-order system (for implicit integrators).
