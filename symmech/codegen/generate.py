@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import sympy as sp
 
-from symmech.codegen.backends import BACKENDS, STEP_DOCS, environment, templates_used
+from symmech.codegen.backends import BACKENDS, STEP_DOCS, Backend, environment, templates_used
 from symmech.codegen.escape import file_name
 from symmech.codegen.lower import LoweredFunction, Memo, Names, lower
 from symmech.codegen.plan import Block, CodegenError, FunctionPlan, ScenePlan, build_plan
@@ -151,6 +151,31 @@ def generate(
     )
     plan = _with_metric_checks(scene, plan, constants, definitions)
     rules = _parameter_rules(scene, plan)
+    plan, lowered = _lowered(plan, backend, cse)
+    omitted = (*plan.omitted, *_argument_notes(plan, lowered))
+    stem = f"symmech_{file_name(scene.name)}"
+    context = _context(scene.name, plan, lowered, rules, omitted, stem)
+    files = _render_files(backend.templates_to_render(stem), context, target == "c")
+    extension = _extension(scene.name, plan, lowered, stem) if target == "c" else ""
+    return GeneratedCode(
+        scene_name=scene.name,
+        target=target,
+        stem=stem,
+        files=files,
+        plan=plan,
+        functions=lowered,
+        omitted=omitted,
+        parameter_rules=rules,
+        extension=extension,
+    )
+
+
+def _lowered(
+    plan: ScenePlan, backend: Backend, cse: bool
+) -> tuple[ScenePlan, tuple[LoweredFunction, ...]]:
+    """Every function of ``plan`` lowered for ``backend`` (a callee before its callers),
+    then the constrained solve shared (:func:`~symmech.codegen.sharing.share_constrained_solve`,
+    which may add ``dynamics`` to the plan)."""
     names = Names.of(plan)
     memo = Memo()
 
@@ -171,16 +196,22 @@ def generate(
     for f in plan.functions:
         called = f.calls or (f.part_of[0] if f.part_of else None)
         done[f.name] = lower_one(f, done[called] if called is not None else None)
-    plan, done = share_constrained_solve(plan, done, lower_one)
-    lowered = tuple(done.values())
-    omitted = (*plan.omitted, *_argument_notes(plan, lowered))
-    stem = f"symmech_{file_name(scene.name)}"
-    from symmech import __version__
+    shared, done = share_constrained_solve(plan, done, lower_one)
+    return shared, tuple(done.values())
 
-    steps = sorted({f.step for f in lowered if f.step})
-    context = {
+
+def _context(
+    scene_name: str,
+    plan: ScenePlan,
+    lowered: Sequence[LoweredFunction],
+    rules: Sequence[ParameterRule],
+    omitted: Sequence[str],
+    stem: str,
+) -> dict[str, object]:
+    """What the templates of a scene's files are rendered with."""
+    return {
         # text: raw here, escaped by the templates' filters (symmech.codegen.escape)
-        "scene": scene.name,
+        "scene": scene_name,
         "n": plan.n,
         "m": plan.m,
         "walls": [repr(w) for w in plan.walls],
@@ -206,7 +237,7 @@ def generate(
         ],
         "functions": list(lowered),
         "callees": {f.name: f for f in lowered},
-        "steps": steps,
+        "steps": sorted({f.step for f in lowered if f.step}),
         "solves": any(f.solve for f in lowered),
         "scaled": any(f.scaled for f in lowered),
         "step_docs": STEP_DOCS,
@@ -215,38 +246,36 @@ def generate(
         "guard": f"{stem.upper()}_H",
         "macro": re.sub(r"\W", "_", stem.upper()),
     }
-    env = environment()
-    files = _render_files(backend.templates_to_render(stem), context, target == "c")
-    extension = ""
-    if target == "c" and any(f.one_state_fast for f in lowered):
-        extension = env.get_template(EXTENSION_TEMPLATE).render(
-            stamp=_stamp(__version__, templates_used(EXTENSION_TEMPLATE)),
-            scene=scene.name,
-            source=f"{stem}.c",
-            n_parameters=len(plan.parameters),
-            header=f"{stem}.h",
-            prefix=f"{stem}_",
-            functions=[
-                {
-                    "name": f.name,
-                    "sizes": f.argument_sizes(plan.n, 0, 0)[: len(f.state)],
-                    "parameters": len(plan.parameters) if f.takes_parameters else 0,
-                    "dims": list(f.out_shape),
-                }
-                for f in lowered
-                if f.one_state_fast
-            ],
-        )
-    return GeneratedCode(
-        scene_name=scene.name,
-        target=target,
-        stem=stem,
-        files=files,
-        plan=plan,
-        functions=lowered,
-        omitted=omitted,
-        parameter_rules=rules,
-        extension=extension,
+
+
+def _extension(
+    scene_name: str, plan: ScenePlan, lowered: Sequence[LoweredFunction], stem: str
+) -> str:
+    """The source of the CPython extension of a C target (its functions of the state and
+    the parameters only), or "" when it has none."""
+    from symmech import __version__
+
+    if not any(f.one_state_fast for f in lowered):
+        return ""
+    functions = [
+        {
+            "name": f.name,
+            "sizes": f.argument_sizes(plan.n, 0, 0)[: len(f.state)],
+            "parameters": len(plan.parameters) if f.takes_parameters else 0,
+            "dims": list(f.out_shape),
+        }
+        for f in lowered
+        if f.one_state_fast
+    ]
+    template = environment().get_template(EXTENSION_TEMPLATE)
+    return template.render(
+        stamp=_stamp(__version__, templates_used(EXTENSION_TEMPLATE)),
+        scene=scene_name,
+        source=f"{stem}.c",
+        n_parameters=len(plan.parameters),
+        header=f"{stem}.h",
+        prefix=f"{stem}_",
+        functions=functions,
     )
 
 
