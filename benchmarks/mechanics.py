@@ -22,25 +22,27 @@ For the Whipple bicycle of sympy's own test suite (Meijaard et al. 2007; 4 coord
   (target: a ratio below 1), and the full set of functions the same way (target: within
   1.5x).
 
-Where the time goes (the rhs run, CPU seconds of each step timed alone on a quiet
-machine; ``--profile`` prints cProfile of the same run, which inflates sympy's many
-small calls): the import about 0.9 s (``mechanics.convert``: the metric from the
-partial velocities 0.2, Kane's inertia forces 0.1 and the velocity-quadratic forcing
-0.1 that they are compared with (memoised: the scene's forcing reuses it), the loads and
-the constraints 0.1 together, then the declaration's checks 0.25, half of them the
-metric's definiteness with parameters declared without a sign); the generation about 1.3 s (the
-stable forms of the velocity-free entries 0.45, three quarters of it on the 15
-constraint entries holding square roots, ``algebra.stability``; one CSE 0.3; the note
-on the forcing's zero connection coefficients 0.15; printing); gcc about 0.6 s.  The
-partial velocities, accelerations, dot and cross products of the import are formed by
-``mechanics.rates`` (the expressions sympy's vector algebra gives, without its
-``diff`` and matrix products) and the metric's expansions in one polynomial ring.
-Every function: the generation about 2.0 s and gcc about 1.6 s, ``multipliers``
-repeating the code of ``acceleration`` (one CSE and one printing for both, compiled
-twice).  Nothing is cached between the routes: sympy's cache is cleared and each
-library is built in an empty folder.  gcc at -O1 instead of -O2 would save about a
-fifth of the compilation; the default stays -O2 (the benchmark measures what a user
-gets).
+Where the time goes (the rhs run, wall seconds of each step timed alone; ``--profile``
+prints cProfile of the same run, which inflates sympy's many small calls): the import
+about 0.85 s (``mechanics.convert``: the metric from the partial velocities 0.2, Kane's
+inertia forces 0.1 and the velocity-quadratic forcing 0.1 that they are compared with
+(memoised: the scene's forcing reuses it), the loads and the constraints 0.1 together,
+then the declaration's checks 0.25, half of them the metric's definiteness with
+parameters declared without a sign); the generation about 0.95 s (one CSE 0.33; the
+stable forms of the metric's entries 0.15, ``algebra.stability``, the rolling
+constraints' sums over square roots being kept as written; the note on the forcing's
+zero connection coefficients 0.07; printing 0.2); gcc about 0.5 s, the CPython
+extension compiled beside the library.  The partial velocities, accelerations, dot and
+cross products of the import are formed by ``mechanics.rates`` (the expressions sympy's
+vector algebra gives, without its ``diff`` and matrix products) and the metric's
+expansions in one polynomial ring.  Every function: the generation about 1.6 s; the
+acceleration and the multipliers are parts of one solve (``codegen.sharing``), and the
+library is written as two source files that gcc compiles side by side with the
+extension (``codegen.generate.SPLIT_SOURCE_CHARACTERS``; on this machine's 2 CPUs about
+0.8 s of wall time for 1.3 s of gcc).  Nothing is cached between the routes: sympy's
+cache is cleared and each library is built in an empty folder.  gcc at -O1 instead of
+-O2 would save about a fifth of the compilation; the default stays -O2 (the benchmark
+measures what a user gets).
 
 Usage: python3 benchmarks/mechanics.py [--quick] [--profile]
 

@@ -292,8 +292,8 @@ def _render_files(
     templates: Sequence[tuple[str, str]], context: Mapping, split: bool
 ) -> dict[str, str]:
     """The files of the templates rendered with ``context``; with ``split`` (C), a source
-    whose functions are larger than :data:`SPLIT_SOURCE_CHARACTERS` as two files, the
-    functions in their order, the parameter checks in the first."""
+    whose functions are larger than :data:`SPLIT_SOURCE_CHARACTERS` as two files
+    (:func:`_source_parts`), the parameter checks in the first."""
     from symmech import __version__
 
     env = environment()
@@ -317,19 +317,22 @@ def _render_files(
 
 
 def _source_parts(functions: Sequence[LoweredFunction]) -> list[list[LoweredFunction]]:
-    """``functions`` in one part, or in two consecutive parts of about equal printed size
-    when they print more than :data:`SPLIT_SOURCE_CHARACTERS` characters."""
+    """``functions`` in one part, or, when they print more than
+    :data:`SPLIT_SOURCE_CHARACTERS` characters, in two parts of about equal printed size
+    (the largest first, each to the part that is smaller so far), each in their order."""
     sizes = [f.printed_characters for f in functions]
-    total = sum(sizes)
-    if total <= SPLIT_SOURCE_CHARACTERS or len(functions) < 2:
+    if sum(sizes) <= SPLIT_SOURCE_CHARACTERS or len(functions) < 2:
         return [list(functions)]
-    running, cut = 0, 1
-    for k, size in enumerate(sizes[:-1]):
-        running += size
-        cut = k + 1
-        if 2 * running >= total:
-            break
-    return [list(functions[:cut]), list(functions[cut:])]
+    load, second = [0, 0], set()
+    for k in sorted(range(len(functions)), key=lambda k: (-sizes[k], k)):
+        part = 0 if load[0] <= load[1] else 1
+        load[part] += sizes[k]
+        if part:
+            second.add(k)
+    return [
+        [f for k, f in enumerate(functions) if k not in second],
+        [f for k, f in enumerate(functions) if k in second],
+    ]
 
 
 def _parameter_rules(scene: Scene, plan: ScenePlan) -> tuple[ParameterRule, ...]:
