@@ -21,8 +21,9 @@ from typing import TYPE_CHECKING
 import sympy as sp
 
 from symmech.codegen.backends import BACKENDS, STEP_DOCS, Backend, environment, templates_used
+from symmech.codegen.elimination import Memo
 from symmech.codegen.escape import file_name
-from symmech.codegen.lower import LoweredFunction, Memo, Names, lower
+from symmech.codegen.lower import LoweredFunction, Names, lower
 from symmech.codegen.plan import Block, CodegenError, FunctionPlan, ScenePlan, build_plan
 from symmech.codegen.runtime_checks import ParameterRule, parameter_rules
 from symmech.codegen.sharing import share_constrained_solve

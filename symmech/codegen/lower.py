@@ -7,9 +7,9 @@ product (``(a + b)**3``) then gets a temporary of its own, so it is evaluated on
 temporaries and the entries are printed by the backend's printer
 (:mod:`symmech.codegen.printers`).  The result is a frozen :class:`LoweredFunction` of
 already-printed lines: templates only lay them out.  The functions of one scene share
-their entries (the metric and the forcing recur in every solve): a :class:`Memo` kept for
-one ``generate`` call rewrites and folds each entry once, and runs one CSE per distinct
-list of entries.
+their entries (the metric and the forcing recur in every solve): a
+:class:`~symmech.codegen.elimination.Memo` kept for one ``generate`` call rewrites and
+folds each entry once, and runs one CSE per distinct list of entries.
 
 A generated function takes its state arrays (``q``, ``v``, or ``y``: they fix the batch
 shape; C marks one it does not read ``(void)``) and, only when it reads them, the
@@ -56,26 +56,23 @@ the operations its unrolled code performs (``solve_flops``).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
 import sympy as sp
 
-from symmech.algebra.opcount import count_ops
 from symmech.codegen.dialects import Dialect
+from symmech.codegen.elimination import Memo, NotFinite, eliminate
 from symmech.codegen.flops import step_flops, step_sizes
 from symmech.codegen.plan import CodegenError, FunctionPlan, ScenePlan
 from symmech.codegen.printers import (
     correctly_rounded,
-    fold_numbers,
     identifier,
-    product_power,
-    safe_rewrite,
 )
 from symmech.codegen.unroll import STEP_INPUTS, Program, trace_step
 from symmech.declaration.symbols import t as TIME
 
-__all__ = ["LoweredFunction", "Memo", "Names", "lower"]
+__all__ = ["LoweredFunction", "Names", "lower"]
 
 
 @dataclass(frozen=True)
@@ -186,120 +183,6 @@ def _unpack_entries(names: Names, used: set[str]) -> tuple[tuple[str, int, str],
     return tuple(out)
 
 
-def _name_power_bases(
-    replacements: list[tuple[sp.Symbol, sp.Expr]],
-    exprs: list[sp.Expr],
-    symbols: Iterator[sp.Symbol],
-) -> tuple[list[tuple[sp.Symbol, sp.Expr]], list[sp.Expr]]:
-    """Give the compound base of every power printed as a product a temporary, placed
-    just before its first use, so ``(a + b)**3`` evaluates ``a + b`` once."""
-    named: dict[sp.Expr, sp.Symbol] = {}
-    pending: list[tuple[sp.Symbol, sp.Expr]] = []
-
-    def visit(e: sp.Expr) -> sp.Expr:
-        if e.is_Atom:
-            return e
-        args = tuple(visit(a) for a in e.args)
-        if args != e.args:
-            e = e.func(*args)
-        if (
-            e.is_Pow
-            and not e.base.is_Atom
-            and product_power(e.exp)
-            and e.exp not in (sp.S.Half, -sp.S.Half, sp.S.NegativeOne)
-        ):
-            if e.base not in named:
-                named[e.base] = next(symbols)
-                pending.append((named[e.base], e.base))
-            e = sp.Pow(named[e.base], e.exp)
-        return e
-
-    out: list[tuple[sp.Symbol, sp.Expr]] = []
-    for s, e in replacements:
-        e = visit(e)
-        out.extend(pending)
-        pending.clear()
-        out.append((s, e))
-    new_exprs = [visit(e) for e in exprs]
-    out.extend(pending)
-    return out, new_exprs
-
-
-class Memo:
-    """What the functions of one generated scene share, computed once per ``generate``
-    call: each entry as it is printed (:meth:`printable`) and the CSE of each distinct
-    list of entries (:meth:`eliminated`; ``acceleration`` and ``multipliers`` solve the
-    same system), and the text of each expression a backend's printer printed
-    (:meth:`texts`).  Scoped to the call, so nothing outlives the code it served."""
-
-    def __init__(self) -> None:
-        self._printable: dict[sp.Expr, sp.Expr] = {}
-        self._eliminated: dict[tuple[sp.Expr, ...], _Elimination] = {}
-        self._texts: dict[tuple[object, int], tuple[Names, dict[sp.Expr, str]]] = {}
-
-    def texts(self, make_printer: object, names: Names) -> dict[sp.Expr, str]:
-        """The printed text of each expression, for one printer maker and table of names:
-        a temporary prints as its name, so an expression's text is the same in every
-        function of the scene (``multipliers`` prints the temporaries of
-        ``acceleration`` again)."""
-        key = (make_printer, id(names))
-        hit = self._texts.get(key)
-        if hit is None or hit[0] is not names:
-            hit = self._texts[key] = (names, {})
-        return hit[1]
-
-    def printable(self, e: sp.Expr) -> sp.Expr:
-        """An entry as it is printed: :func:`~symmech.codegen.printers.safe_rewrite`,
-        then :func:`~symmech.codegen.printers.fold_numbers`.  Raises :class:`_NotFinite`
-        for an entry holding ``zoo``, ``nan`` or an infinity, and the ``ValueError`` of
-        the folding."""
-        hit = self._printable.get(e)
-        if hit is None:
-            r = safe_rewrite(e)
-            if r.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
-                raise _NotFinite(r)
-            hit = self._printable[e] = fold_numbers(r)
-        return hit
-
-    def eliminated(self, entries: tuple[sp.Expr, ...]) -> _Elimination:
-        """The temporaries and reduced entries of one CSE over ``entries`` (``tmp0``,
-        ``tmp1``, ... in canonical order), the compound bases of powers printed as
-        products named (:func:`_name_power_bases`), and ``sympy.count_ops`` of the
-        result (the figure in a function's header)."""
-        hit = self._eliminated.get(entries)
-        if hit is None:
-            symbols = sp.numbered_symbols("tmp", real=True)
-            replacements, reduced = sp.cse(list(entries), symbols=symbols, order="canonical")
-            named, exprs = _name_power_bases(replacements, reduced, symbols)
-            hit = self._eliminated[entries] = _Elimination(
-                tuple(named), tuple(exprs), _operations(named, exprs)
-            )
-        return hit
-
-
-class _NotFinite(Exception):
-    """An entry holds ``zoo``, ``nan`` or an infinity (the rewritten entry is its
-    argument)."""
-
-
-@dataclass(frozen=True)
-class _Elimination:
-    replacements: tuple[tuple[sp.Symbol, sp.Expr], ...]
-    reduced: tuple[sp.Expr, ...]
-    ops: int
-
-
-def _operations(
-    replacements: Sequence[tuple[sp.Symbol, sp.Expr]], reduced: Sequence[sp.Expr]
-) -> int:
-    """``sympy.count_ops`` of the temporaries and of the reduced entries
-    (:func:`symmech.algebra.opcount.count_ops`, the same integer)."""
-    memo: dict = {}
-    return sum(count_ops(e, memo) for _, e in replacements) + sum(
-        count_ops(e, memo) for e in reduced if not e.is_number
-    )
-
-
 def _constant(e: sp.Expr) -> float | None:
     """The double of a symbol-free entry (as the printed literal evaluates: rationals and
     folded numbers are correctly rounded), or None for a run-time value."""
@@ -321,85 +204,22 @@ def lower(
 ) -> LoweredFunction:
     """CSE and print ``f`` for one backend (``make_printer(names)`` builds its printer,
     ``dialect`` prints its unrolled linear algebra); ``callee`` is the lowered function
-    that ``f`` calls (``rhs``: ``acceleration``).  ``scalar`` (a printer and a dialect)
-    also prints the one-state variant of a function of the state and the parameters
-    (:func:`_scalar_body`).  ``memo`` carries what the functions of one scene share
-    (:class:`Memo`; a fresh one when omitted)."""
+    that ``f`` calls (``rhs``: ``acceleration``) or is part of.  ``scalar`` (a printer and
+    a dialect) also prints the one-state variant of a function of the state and the
+    parameters (:func:`_scalar_body`).  ``memo`` carries what the functions of one scene
+    share (:class:`Memo`; a fresh one when omitted)."""
     memo = memo if memo is not None else Memo()
     target = f.calls or (f.part_of[0] if f.part_of else None)
     if target is not None and (callee is None or callee.name != target):
         raise CodegenError(f"{f.name} calls {target}: lower it first and pass it as callee")
-    entries: list[sp.Expr] = []
-    where: list[tuple[str, int, tuple[int, ...]]] = []
-    for b in f.blocks:
-        for flat, e in enumerate(b.entries):
-            try:
-                e = memo.printable(e)
-            except _NotFinite as exc:
-                raise CodegenError(
-                    f"{f.name}: {b.name}[{flat}] is not finite ({exc.args[0]}); the closed"
-                    " form is singular for every state"
-                ) from None
-            except ValueError as exc:
-                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {exc}") from None
-            entries.append(e)
-            if not b.shape:
-                idx: tuple[int, ...] = ()
-            elif len(b.shape) == 1:
-                idx = (flat,)
-            else:
-                idx = divmod(flat, b.shape[1])
-            where.append((b.name, flat, tuple(idx)))
-    program = None
+    entries, where = _gathered(f, memo)
     check = f.step is None and any(b.name == "M" for b in f.blocks)
-    if check:
-        # the closed form's metric: finite entries and positive Cholesky pivots, traced as
-        # the factorisation of spd_solve with a zero right-hand side, whose stores of
-        # constant zeros are dropped; only the entries it reads are kept
-        M_block = next(b for b in f.blocks if b.name == "M")
-        n_m = M_block.shape[0]
-        consts = [_constant(e) for (blk, _, _), e in zip(where, entries, strict=True) if blk == "M"]
-        off = [consts[i * n_m + j] for i in range(n_m) for j in range(n_m) if i != j]
-        diag = int(all(c == 0.0 for c in off))
-        program = trace_step(
-            "spd_solve", (n_m, diag), {"M": (M_block.shape, consts), "f": ((n_m,), [0.0] * n_m)}
-        )
-        program.statements = [st for st in program.statements if st[0] != "out"]
-        needed = {(i.block, i.flat) for i in program.inputs}
-        keep = [i for i, (blk, flat, _) in enumerate(where) if blk != "M" or (blk, flat) in needed]
-        entries = [entries[i] for i in keep]
-        where = [where[i] for i in keep]
-    elif f.step is not None:
-        # unroll the step over the structure of its inputs, then keep only the entries
-        # it reads (they become locals; constants are folded into the unrolled code)
-        shapes = {b.name: b.shape for b in f.blocks}
-        values: dict[str, list[float | None]] = {name: [] for name in STEP_INPUTS[f.step]}
-        for (blk, _, _), e in zip(where, entries, strict=True):
-            if blk in values:
-                values[blk].append(_constant(e))
-        structure: dict[str, tuple[tuple[int, ...], Sequence[float | None]]] = {
-            name: (shapes[name], values[name]) for name in values
-        }
-        program = trace_step(f.step, f.step_args, structure)
-        needed = {(i.block, i.flat) for i in program.inputs}
-        keep = [i for i, (blk, flat, _) in enumerate(where) if (blk, flat) in needed]
-        entries = [entries[i] for i in keep]
-        where = [where[i] for i in keep]
-    nonconst = [i for i, e in enumerate(entries) if not e.is_number]
-    if cse and nonconst:
-        done = memo.eliminated(tuple(entries[i] for i in nonconst))
-        replacements, reduced, ops = done.replacements, done.reduced, done.ops
-    else:
-        replacements, reduced = (), tuple(entries[i] for i in nonconst)
-        ops = _operations(replacements, reduced)
-    final = list(entries)
-    for i, e in zip(nonconst, reduced, strict=True):
-        final[i] = e
+    program, entries, where = _traced(f, check, entries, where)
+    replacements, final, ops = eliminate(entries, cse, memo)
     table = dict(names.table)
     for s, _ in replacements:
         table[s] = s.name
     printer = make_printer(table)
-
     texts = memo.texts(make_printer, names)
 
     def pr(e: sp.Expr) -> str:
@@ -416,64 +236,20 @@ def lower(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
     )
     used_syms: set = set()
-    for _, e in replacements:
-        used_syms |= e.free_symbols
-    for e in final:
+    for e in (*(e for _, e in replacements), *final):
         used_syms |= e.free_symbols
     used = {names.table[s] for s in used_syms if s in names.table}
     unpack = _unpack_entries(names, used)
-    read = {k for k, _, _ in unpack}
-    solve: tuple[str, ...] = ()
-    flops = 0
-    assignments: tuple[tuple[str, int, str, tuple[int, ...]], ...] = ()
-    blocks: tuple[tuple[str, int], ...] = ()
-    block_shapes: tuple[tuple[str, tuple[int, ...]], ...] = ()
-    if check:
-        assert program is not None
-        exprs = {(blk, flat): text for blk, flat, text, _ in printed if blk == "M"}
-        solve = tuple(dialect.lines(program, f.out_shape, exprs))
-        flops = program.flops
-        assignments = tuple(a for a in printed if a[0] != "M")
-        blocks = tuple((b.name, b.size) for b in f.blocks if b.name not in ("out", "M"))
-        block_shapes = tuple((b.name, b.shape) for b in f.blocks if b.name != "M")
-    elif program is not None:
-        exprs = {(blk, flat): text for blk, flat, text, _ in printed}
-        solve = tuple(dialect.lines(program, f.out_shape, exprs))
-        flops = program.flops
-        if program.reads_state("v"):
-            read.add("v")
-    else:
-        assignments = printed
-        blocks = tuple((b.name, b.size) for b in f.blocks if b.name != "out")
-        block_shapes = tuple((b.name, b.shape) for b in f.blocks)
+    layout = _laid_out(f, check, program, printed, dialect)
+    read = {k for k, _, _ in unpack} | ({"v"} if layout.reads_v else set())
     if target is not None:
         read |= {"q", "v"}
-    unused = tuple(arg for arg in f.state if arg != "y" and arg not in read)
     # the arguments p, t, u are taken when the printed code reads them (an unrolled solve
     # may read fewer than the plan's blocks mention) or the callee does
-    takes_p = any(name in used for name in names.p)
-    takes_t = "t" in used
-    takes_u = any(name in used for name in names.u)
-    if callee is not None:
-        takes_p |= callee.takes_parameters
-        takes_t |= callee.takes_time
-        takes_u |= callee.takes_inputs
-    cost = f"Operations after CSE: {ops} (sympy.count_ops); temporaries: {len(replacements)}"
-    if f.step:
-        cost += (
-            f"; solve: {flops} flops ({step_sizes(f.step, f.step_args)}; dense:"
-            f" {step_flops(f.step, f.step_args)})"
-        )
-    if check:
-        cost += f"; metric check: {flops} flops"
-    if f.part_of is not None and callee is not None:  # its cost is the whole's
-        cost = f"Entries {f.part_of[1]} ... {f.part_of[1] + f.out_size - 1} of {callee.name}"
-        ops, flops = callee.operations, callee.solve_flops
-    if callee is not None:
-        cost += f"; then the call of {callee.name}: {callee.operations} operations"
-        if callee.solve_flops:
-            cost += f" + {callee.solve_flops} flops"
-    scaled = f.kind == "impact" and not plan.moving_walls[f.wall_index or 0]
+    takes_p = any(name in used for name in names.p) or bool(callee and callee.takes_parameters)
+    takes_t = "t" in used or bool(callee and callee.takes_time)
+    takes_u = any(name in used for name in names.u) or bool(callee and callee.takes_inputs)
+    cost, ops, flops = _cost(f, ops, len(replacements), layout.flops, check, callee)
     scalar_body = None
     if scalar is not None and not (takes_t or takes_u):
         scalar_body = _scalar_body(
@@ -491,11 +267,11 @@ def lower(
         takes_time=takes_t,
         takes_inputs=takes_u,
         unpack=unpack,
-        unused=unused,
+        unused=tuple(arg for arg in f.state if arg != "y" and arg not in read),
         temporaries=temporaries,
-        blocks=blocks,
-        assignments=assignments,
-        block_shapes=block_shapes,
+        blocks=layout.blocks,
+        assignments=layout.assignments,
+        block_shapes=layout.block_shapes,
         step=f.step,
         step_args=f.step_args,
         calls=f.calls,
@@ -505,13 +281,158 @@ def lower(
         operations=ops,
         n_temporaries=len(replacements),
         solve_flops=flops,
-        solve=solve,
+        solve=layout.solve,
         cost=cost + ".",
         expressions=tuple(e for _, e in replacements) + tuple(final),
         metric_check=check,
-        scaled=scaled,
+        scaled=f.kind == "impact" and not plan.moving_walls[f.wall_index or 0],
         scalar=scalar_body,
     )
+
+
+Where = list[tuple[str, int, tuple[int, ...]]]
+
+
+def _gathered(f: FunctionPlan, memo: Memo) -> tuple[list[sp.Expr], Where]:
+    """Every entry of ``f``'s blocks as it is printed (:meth:`Memo.printable`), and
+    where it goes: (block, flat index, index)."""
+    entries: list[sp.Expr] = []
+    where: Where = []
+    for b in f.blocks:
+        for flat, e in enumerate(b.entries):
+            try:
+                e = memo.printable(e)
+            except NotFinite as exc:
+                raise CodegenError(
+                    f"{f.name}: {b.name}[{flat}] is not finite ({exc.args[0]}); the closed"
+                    " form is singular for every state"
+                ) from None
+            except ValueError as exc:
+                raise CodegenError(f"{f.name}: {b.name}[{flat}]: {exc}") from None
+            entries.append(e)
+            if not b.shape:
+                idx: tuple[int, ...] = ()
+            elif len(b.shape) == 1:
+                idx = (flat,)
+            else:
+                idx = divmod(flat, b.shape[1])
+            where.append((b.name, flat, tuple(idx)))
+    return entries, where
+
+
+def _traced(
+    f: FunctionPlan, check: bool, entries: list[sp.Expr], where: Where
+) -> tuple[Program | None, list[sp.Expr], Where]:
+    """The unrolled program of ``f``'s step, or of its closed form's metric check, and the
+    entries it reads (the others are dropped); (None, entries, where) for neither."""
+    if check:
+        # the closed form's metric: finite entries and positive Cholesky pivots, traced as
+        # the factorisation of spd_solve with a zero right-hand side, whose stores of
+        # constant zeros are dropped; only the entries it reads are kept
+        M_block = next(b for b in f.blocks if b.name == "M")
+        n_m = M_block.shape[0]
+        consts = [_constant(e) for (blk, _, _), e in zip(where, entries, strict=True) if blk == "M"]
+        off = [consts[i * n_m + j] for i in range(n_m) for j in range(n_m) if i != j]
+        diag = int(all(c == 0.0 for c in off))
+        program = trace_step(
+            "spd_solve", (n_m, diag), {"M": (M_block.shape, consts), "f": ((n_m,), [0.0] * n_m)}
+        )
+        program.statements = [st for st in program.statements if st[0] != "out"]
+        needed = {(i.block, i.flat) for i in program.inputs}
+        keep = [i for i, (blk, flat, _) in enumerate(where) if blk != "M" or (blk, flat) in needed]
+    elif f.step is not None:
+        # unroll the step over the structure of its inputs, then keep only the entries
+        # it reads (they become locals; constants are folded into the unrolled code)
+        shapes = {b.name: b.shape for b in f.blocks}
+        values: dict[str, list[float | None]] = {name: [] for name in STEP_INPUTS[f.step]}
+        for (blk, _, _), e in zip(where, entries, strict=True):
+            if blk in values:
+                values[blk].append(_constant(e))
+        structure: dict[str, tuple[tuple[int, ...], Sequence[float | None]]] = {
+            name: (shapes[name], values[name]) for name in values
+        }
+        program = trace_step(f.step, f.step_args, structure)
+        needed = {(i.block, i.flat) for i in program.inputs}
+        keep = [i for i, (blk, flat, _) in enumerate(where) if (blk, flat) in needed]
+    else:
+        return None, entries, where
+    return program, [entries[i] for i in keep], [where[i] for i in keep]
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """How a function's printed entries are laid out: the unrolled step (``solve``, its
+    ``flops``), the stores into local blocks and ``out`` (``assignments``), the local
+    blocks, and whether the step reads the state ``v`` itself (``impact_kkt``)."""
+
+    solve: tuple[str, ...] = ()
+    flops: int = 0
+    assignments: tuple[tuple[str, int, str, tuple[int, ...]], ...] = ()
+    blocks: tuple[tuple[str, int], ...] = ()
+    block_shapes: tuple[tuple[str, tuple[int, ...]], ...] = ()
+    reads_v: bool = False
+
+
+def _laid_out(
+    f: FunctionPlan,
+    check: bool,
+    program: Program | None,
+    printed: tuple[tuple[str, int, str, tuple[int, ...]], ...],
+    dialect: Dialect,
+) -> _Layout:
+    """The :class:`_Layout` of ``f``: a metric check prints the metric's entries into its
+    unrolled factorisation and stores the others; a step prints every entry into its
+    unrolled code; else every entry is stored."""
+    if check:
+        assert program is not None
+        exprs = {(blk, flat): text for blk, flat, text, _ in printed if blk == "M"}
+        return _Layout(
+            solve=tuple(dialect.lines(program, f.out_shape, exprs)),
+            flops=program.flops,
+            assignments=tuple(a for a in printed if a[0] != "M"),
+            blocks=tuple((b.name, b.size) for b in f.blocks if b.name not in ("out", "M")),
+            block_shapes=tuple((b.name, b.shape) for b in f.blocks if b.name != "M"),
+        )
+    if program is not None:
+        exprs = {(blk, flat): text for blk, flat, text, _ in printed}
+        return _Layout(
+            solve=tuple(dialect.lines(program, f.out_shape, exprs)),
+            flops=program.flops,
+            reads_v=program.reads_state("v"),
+        )
+    return _Layout(
+        assignments=printed,
+        blocks=tuple((b.name, b.size) for b in f.blocks if b.name != "out"),
+        block_shapes=tuple((b.name, b.shape) for b in f.blocks),
+    )
+
+
+def _cost(
+    f: FunctionPlan,
+    ops: int,
+    temporaries: int,
+    flops: int,
+    check: bool,
+    callee: LoweredFunction | None,
+) -> tuple[str, int, int]:
+    """The header's cost line of ``f``, and its operations and flops (a part's are those
+    of the function it is part of)."""
+    cost = f"Operations after CSE: {ops} (sympy.count_ops); temporaries: {temporaries}"
+    if f.step:
+        cost += (
+            f"; solve: {flops} flops ({step_sizes(f.step, f.step_args)}; dense:"
+            f" {step_flops(f.step, f.step_args)})"
+        )
+    if check:
+        cost += f"; metric check: {flops} flops"
+    if f.part_of is not None and callee is not None:  # its cost is the whole's
+        cost = f"Entries {f.part_of[1]} ... {f.part_of[1] + f.out_size - 1} of {callee.name}"
+        ops, flops = callee.operations, callee.solve_flops
+    if callee is not None:
+        cost += f"; then the call of {callee.name}: {callee.operations} operations"
+        if callee.solve_flops:
+            cost += f" + {callee.solve_flops} flops"
+    return cost, ops, flops
 
 
 def _scalar_body(
