@@ -216,21 +216,8 @@ def lower(
     check = f.step is None and any(b.name == "M" for b in f.blocks)
     program, entries, where = _traced(f, check, entries, where)
     replacements, final, ops = eliminate(entries, cse, memo)
-    table = dict(names.table)
-    for s, _ in replacements:
-        table[s] = s.name
-    printer = make_printer(table)
-    texts = memo.texts(make_printer, names)
-
-    def pr(e: sp.Expr) -> str:
-        text = texts.get(e)
-        if text is None:
-            try:
-                text = texts[e] = printer.doprint(e)
-            except ValueError as exc:
-                raise CodegenError(f"{f.name}: cannot print {e}: {exc}") from None
-        return text
-
+    table = {**names.table, **{s: s.name for s, _ in replacements}}
+    pr = _printing(f.name, make_printer(table), memo.texts(make_printer, names))
     temporaries = tuple((s.name, pr(e)) for s, e in replacements)
     printed = tuple(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
@@ -291,6 +278,24 @@ def lower(
 
 
 Where = list[tuple[str, int, tuple[int, ...]]]
+
+
+def _printing(
+    name: str, printer: sp.printing.printer.Printer, texts: dict[sp.Expr, str]
+) -> Callable[[sp.Expr], str]:
+    """Print an expression with ``printer``, once: ``texts`` keeps what was printed (shared
+    by the functions of a scene with the same names); a failure names the function."""
+
+    def pr(e: sp.Expr) -> str:
+        text = texts.get(e)
+        if text is None:
+            try:
+                text = texts[e] = printer.doprint(e)
+            except ValueError as exc:
+                raise CodegenError(f"{name}: cannot print {e}: {exc}") from None
+        return text
+
+    return pr
 
 
 def _gathered(f: FunctionPlan, memo: Memo) -> tuple[list[sp.Expr], Where]:
