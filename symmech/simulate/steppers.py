@@ -112,8 +112,14 @@ def _scale(y0: np.ndarray, y1: np.ndarray, rtol: float, atol) -> np.ndarray:
 
 
 def _finite_or_inf(error: float, *arrays: np.ndarray) -> float:
-    if not math.isfinite(error) or not all(np.all(np.isfinite(a)) for a in arrays):
+    """``error``, or inf when it or an entry of ``arrays`` is not finite (a finite sum of
+    an array's entries is the cheap proof that they all are; an inf or a NaN makes any sum
+    non-finite, and a sum that overflows is settled entry by entry)."""
+    if not math.isfinite(error):
         return math.inf
+    for a in arrays:
+        if not math.isfinite(a.sum()) and not np.isfinite(a).all():
+            return math.inf
     return error
 
 
