@@ -50,9 +50,14 @@ class StepSearch:
         self.divided: list[bool] = []
         self.start: list[Any] = []
         self.band: list[bool] = []
+        #: per event function: whether it is a contact force (a force's sign change is
+        #: ``g > 0 -> g <= 0``, a gap's ``g >= 0 -> g < 0``), and its evaluation at (t, y)
+        self.force = [what == "release" for _, what in self.funcs]
+        self.evals: list[Any] = []
         self.gaps = [self.f.gap_function(w) if what == "wall" else None for w, what in self.funcs]
         for (w, what), gap in zip(self.funcs, self.gaps, strict=True):
             self._prepare(w, what, gap)
+            self.evals.append(self._evaluation(len(self.evals)))
 
     def _prepare(self, w: int, what: str, gap: Any) -> None:
         """The search rule of event function ``(w, what)`` and its value at t0 (None: to be
@@ -82,39 +87,46 @@ class StepSearch:
 
     def value(self, i: int, t: Any, y: np.ndarray) -> Any:
         """Event function ``i`` at (t, y)."""
+        return self.evals[i](t, y)
+
+    def _evaluation(self, i: int) -> Any:
+        """``(t, y) ->`` event function ``i`` (its rule fixed by :meth:`_prepare`): a held
+        wall's normal force, or the gap, plus ``tol_psi`` when banded, divided by
+        ``t - t0`` when divided."""
         w, what = self.funcs[i]
-        run = self.run
+        run, n = self.run, self.run.n
         if what == "release":
-            n = run.n
-            return self.f.normal_force(w, t, y[:n], y[n:], run.mode)
+            force, mode = self.f.normal_force, run.mode
+            return lambda t, y: force(w, t, y[:n], y[n:], mode)
         gap = self.gaps[i]
         assert gap is not None
-        psi = gap(t, y[: run.n])
         if self.band[i]:
-            psi = psi + run.tol_psi
-        return psi / (t - self.seg.t0) if self.divided[i] else psi
+            tol = run.tol_psi
+            return lambda t, y: gap(t, y[:n]) + tol
+        if self.divided[i]:
+            t0 = self.seg.t0
+            return lambda t, y: gap(t, y[:n]) / (t - t0)
+        return lambda t, y: gap(t, y[:n])
 
     def state(self, t: Any) -> np.ndarray:
         seg = self.seg
         return seg.y0 if t == seg.t0 else seg.y1 if t == seg.t1 else seg.dense(t)
 
-    def _crossed(self, i: int, a: Any, b: Any) -> bool:
-        return (a > 0 >= b) if self.funcs[i][1] == "release" else (a >= 0 > b)
-
     def earliest(self) -> Found | None:
         """The earliest event inside the step, or None."""
         if not self.funcs:
             return None
-        seg, count = self.seg, len(self.funcs)
+        seg = self.seg
         t0, K = seg.t0, self.run.o.samples
         times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
         # on a step a few ulps long the samples round onto each other: keep distinct times
         times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
         states = seg.samples(times)
         vals = [[self.value(i, t0, seg.y0) if s is None else s for i, s in enumerate(self.start)]]
+        evals = self.evals
         for k in range(1, len(times)):
             tk, yk = times[k], states[k]
-            vals.append([self.value(i, tk, yk) for i in range(count)])
+            vals.append([g(tk, yk) for g in evals])
             brackets = self._brackets(times, vals, k)
             if brackets:
                 return self._locate(brackets)
@@ -124,11 +136,12 @@ class StepSearch:
         """The brackets ``(i, lo, hi, g(lo), g(hi))`` of the event functions between
         samples ``k - 1`` and ``k`` (a sign change, or a gap's dip below zero)."""
         out = []
+        force = self.force
         for i in range(len(self.funcs)):
             a, b = vals[k - 1][i], vals[k][i]
-            if self._crossed(i, a, b):
+            if (a > 0 >= b) if force[i] else (a >= 0 > b):
                 out.append((i, times[k - 1], times[k], a, b))
-            elif k >= 2 and a <= b and a <= vals[k - 2][i] and self.funcs[i][1] == "wall":
+            elif k >= 2 and a <= b and not force[i] and a <= vals[k - 2][i]:
                 # a local minimum at sample k - 1 (parabola_dip's own first test)
                 tv = parabola_dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
                 if tv is not None:
