@@ -118,3 +118,46 @@ def test_samples_without_many_call_dense():
     assert seg.many is None
     mid = 0.5 * (seg.t0 + seg.t1)
     assert np.array_equal(seg.samples([seg.t0, mid, seg.t1])[1], seg.dense(mid))
+
+
+def test_head_equals_the_continuous_output_entry_by_entry():
+    flow = RKFlow(_oscillator, "dop853", 1e-6, 1e-8, np.inf)
+    flow.start(0.0, np.array([0.3, 0.0, 1.0, 0.5]), 5.0)
+    for _ in range(3):
+        seg = flow.advance()
+        assert seg.head is not None
+        for k in range(9):
+            t = seg.t0 + (seg.t1 - seg.t0) * k / 8
+            assert seg.head(t, 2) == seg.dense(t)[:2].tolist()
+            assert seg.head(t, 4) == seg.dense(t).tolist()
+    scipy_flow = ScipyFlow(_oscillator, "DOP853", 1e-6, 1e-8, np.inf)
+    scipy_flow.start(0.0, np.array([0.3, 0.0, 1.0, 0.5]), 5.0)
+    assert scipy_flow.advance().head is None  # SciPy's continuous output only
+
+
+@pytest.mark.parametrize("target", ["numpy", "c"])
+def test_point_evaluations_equal_the_bound_functions(target):
+    if target == "c":
+        require_c_compiler()
+    fns = _functions(target)
+    n = fns.n
+    bound = fns._bound_module(())
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        y = np.concatenate([[0.0, 1.0 + rng.random(), rng.normal()], rng.normal(size=n)])
+        q, v = y[:n], y[n:]
+        assert np.array_equal(fns.rhs((), 0.0, y), bound.rhs(y))
+        assert fns.energy(0.0, q, v) == float(bound.energy(q, v))
+        for w in range(fns.walls):
+            name = fns._wall_name("psi", w)
+            assert fns.psi(w, 0.0, q) == float(bound.call(name, q))
+            assert fns.gap_function(w)(0.0, q.tolist()) == fns.psi(w, 0.0, q)
+            assert np.array_equal(
+                fns.impact(w, 0.0, q, v), bound.call(fns._wall_name("impact", w), q, v)
+            )
+            rate = fns.rate(w, 0.0, y, fns.rhs((), 0.0, y))
+            assert fns.normal_rate(w, 0.0, y) == rate
+            assert fns.normal_rate(w, 0.0, y.copy()) == rate  # kept: the same value
+        # a state of another size goes the general way, which explains
+        with pytest.raises(sm.codegen.CodegenError):
+            fns.psi(0, 0.0, np.zeros(n + 1))

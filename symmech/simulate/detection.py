@@ -98,15 +98,21 @@ class StepSearch:
         if what == "release":
             force, mode = self.f.normal_force, run.mode
             return lambda t, y: force(w, t, y[:n], y[n:], mode)
+        rule = self._gap_rule(i)
+        return lambda t, y: rule(t, y[:n])
+
+    def _gap_rule(self, i: int) -> Any:
+        """``(t, q) ->`` event function ``i``, a gap: psi, plus ``tol_psi`` when banded,
+        divided by ``t - t0`` when divided (``q`` an array or a list of floats)."""
         gap = self.gaps[i]
         assert gap is not None
         if self.band[i]:
-            tol = run.tol_psi
-            return lambda t, y: gap(t, y[:n]) + tol
+            tol = self.run.tol_psi
+            return lambda t, q: gap(t, q) + tol
         if self.divided[i]:
             t0 = self.seg.t0
-            return lambda t, y: gap(t, y[:n]) / (t - t0)
-        return lambda t, y: gap(t, y[:n])
+            return lambda t, q: gap(t, q) / (t - t0)
+        return gap
 
     def state(self, t: Any) -> np.ndarray:
         seg = self.seg
@@ -155,12 +161,10 @@ class StepSearch:
 
     def _locate(self, brackets: list[tuple[int, Any, Any, Any, Any]]) -> Found:
         """The earliest root over the brackets (each narrowed on the continuous output)."""
-        seg, run = self.seg, self.run
+        run = self.run
         best: Found | None = None
         for i, lo, hi, glo, ghi in brackets:
-
-            def g(t: Any, i: int = i) -> Any:
-                return self.value(i, t, seg.dense(t))
+            g = self._root_function(i)
 
             if ghi == 0:  # a contact force reaching exactly zero at the sample
                 a = hi
@@ -171,6 +175,17 @@ class StepSearch:
                 best = (a, self.state(a), *self.funcs[i])
         assert best is not None
         return best
+
+    def _root_function(self, i: int) -> Any:
+        """``t ->`` event function ``i`` on the step's continuous output; a gap through the
+        coordinates alone where the step gives them as floats (``seg.head``: the same
+        values, without building the whole state at every probe of the root search)."""
+        seg = self.seg
+        head = seg.head
+        if head is None or self.force[i]:
+            return lambda t: self.value(i, t, seg.dense(t))
+        rule, n = self._gap_rule(i), self.run.n
+        return lambda t: rule(t, head(t, n))
 
     def polish(self, i: int, a: Any, b: Any, ga: Any, gb: Any) -> Any:
         """The event time found on the step's continuous output; where the step can

@@ -38,7 +38,9 @@ class FlowFailure(RuntimeError):
 class Segment:
     """One accepted step from ``t0`` to ``t1``: end states, the derivative at ``t1``, and
     ``dense(t)`` for t in [t0, t1]; ``many(ts)``, where the flow has it, is ``dense`` at
-    the times ``ts`` at once (rows of an array: the same values, element by element)."""
+    the times ``ts`` at once (rows of an array: the same values, element by element), and
+    ``head(t, m)`` the first ``m`` entries of ``dense(t)`` as a list of floats (the same
+    values)."""
 
     t0: float
     t1: float
@@ -47,6 +49,7 @@ class Segment:
     f1: np.ndarray | None
     dense: Callable[[float], np.ndarray]
     many: Callable[[Sequence[float]], np.ndarray] | None = None
+    head: Callable[[float, int], list[float]] | None = None
 
     def samples(self, times: Sequence[Any]) -> list[np.ndarray]:
         """The states at ``times`` (in [t0, t1]): ``y0`` at t0, ``y1`` at t1, the
@@ -177,13 +180,18 @@ class RKFlow:
         def dense(tt: float, _d: Any = dense_step, _t0: float = t, _h: float = h) -> np.ndarray:
             return _d((tt - _t0) / _h)
 
-        many = None
+        many = head = None
         if hasattr(dense_step, "many"):
 
             def many(ts: Sequence[float], _d: Any = dense_step, _t0: float = t, _h: float = h):
                 return _d.many((np.asarray(ts, dtype=float) - _t0) / _h)
 
-        seg = Segment(t, t1, y, st.y, st.f, dense, many)
+        if hasattr(dense_step, "head"):
+
+            def head(tt: float, m: int, _d: Any = dense_step, _t0: float = t, _h: float = h):
+                return _d.head((tt - _t0) / _h, m)
+
+        seg = Segment(t, t1, y, st.y, st.f, dense, many, head)
         self.t, self.y, self.fy = t1, st.y, st.f
         return seg
 
@@ -381,7 +389,8 @@ class AugmentedFlow:
                 return _m(ts)[:, :k]
 
         f1 = None if seg.f1 is None else seg.f1[:k]
-        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many)
+        # the first m <= k entries of the augmented state are those of the loop's
+        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many, seg.head)
 
     def limit_step(self, h: float) -> None:
         self.inner.limit_step(h)

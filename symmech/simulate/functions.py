@@ -86,7 +86,7 @@ class Functions:
         self._walls: dict[tuple[str, int], str] = {}
         #: mode -> the fused augmented right-hand side (None: the general path)
         self._kernels: dict[Mode, Callable[[float, np.ndarray], np.ndarray | None] | None] = {}
-        self._gaps: dict[int, Callable[[float, np.ndarray], float]] = {}
+        self._gaps: dict[int, Callable[[float, Any], float]] = {}
         #: (wall, t, the state's bytes) -> normal rate (:meth:`normal_rate`)
         self._rates: dict[tuple[int, float, bytes], float] = {}
 
@@ -247,25 +247,26 @@ class Functions:
 
         return arrays
 
-    def gap_function(self, wall: int) -> Callable[[float, np.ndarray], float]:
-        """``(t, q) -> psi`` of ``wall``: :meth:`psi` through its direct caller where
-        there is one (the event search samples it many times a step)."""
+    def gap_function(self, wall: int) -> Callable[[float, Any], float]:
+        """``(t, q) -> psi`` of ``wall`` (``q`` an array or a list of floats): :meth:`psi`
+        through its direct caller where there is one (the event search samples it many
+        times a step)."""
         fn = self._gaps.get(wall)
         if fn is None:
             fn = self._gaps[wall] = self._gap_function(wall)
         return fn
 
-    def _gap_function(self, wall: int) -> Callable[[float, np.ndarray], float]:
+    def _gap_function(self, wall: int) -> Callable[[float, Any], float]:
         direct = self._direct(FREE, self._wall_name("psi", wall))
         psi = self.psi
         if direct is None:
-            return lambda t, q: psi(wall, t, q)
+            return lambda t, q: psi(wall, t, np.asarray(q, dtype=float))
         fn, plain = direct
         if plain:
 
-            def over_lists(t: float, q: np.ndarray) -> float:
-                out = fn(q.tolist())
-                return out[0] if out is not None else psi(wall, t, q)
+            def over_lists(t: float, q: np.ndarray | list[float]) -> float:
+                out = fn(q if type(q) is list else q.tolist())
+                return out[0] if out is not None else psi(wall, t, np.asarray(q, dtype=float))
 
             return over_lists
 

@@ -233,6 +233,7 @@ class _Dop853Dense:
         self.t0, self.h = t0, h
         self._f, self._y0, self._y1, self._K = f, y0, y1, K
         self._F: np.ndarray | None = None
+        self._columns: list[tuple[float, ...]] | None = None
         self.owner = owner
 
     def _build(self) -> np.ndarray:
@@ -264,6 +265,21 @@ class _Dop853Dense:
         for k in range(5, -1, -1):
             acc = F[k] + (s1 if k % 2 == 0 else s) * acc
         return self._y0 + s * acc
+
+    def head(self, theta: float, m: int) -> list[float]:
+        """The first ``m`` entries of ``self(theta)`` as floats, by the same operations on
+        each entry (float64 arithmetic, entry by entry, is the same in Python and NumPy):
+        a root search evaluates one gap of the coordinates many times, and for a few
+        entries the arrays' per-operation cost is most of the work."""
+        if self._columns is None:
+            if self._F is None:
+                self._F = self._build()
+            self._columns = list(zip(*self._F.tolist(), self._y0.tolist(), strict=True))
+        s, s1 = theta, 1 - theta
+        return [
+            y0 + s * (f0 + s1 * (f1 + s * (f2 + s1 * (f3 + s * (f4 + s1 * (f5 + s * f6))))))
+            for f0, f1, f2, f3, f4, f5, f6, y0 in self._columns[:m]
+        ]
 
     def many(self, thetas: np.ndarray) -> np.ndarray:
         """``self(theta)`` for each theta, as the rows of an array (the same operations)."""
