@@ -265,7 +265,7 @@ class Functions:
         if plain:
 
             def over_lists(t: float, q: np.ndarray | list[float]) -> float:
-                out = fn(q if type(q) is list else q.tolist())
+                out = fn(q if isinstance(q, list) else q.tolist())
                 return out[0] if out is not None else psi(wall, t, np.asarray(q, dtype=float))
 
             return over_lists
