@@ -130,9 +130,21 @@ def test_head_equals_the_continuous_output_entry_by_entry():
             t = seg.t0 + (seg.t1 - seg.t0) * k / 8
             assert seg.head(t, 2) == seg.dense(t)[:2].tolist()
             assert seg.head(t, 4) == seg.dense(t).tolist()
-    scipy_flow = ScipyFlow(_oscillator, "DOP853", 1e-6, 1e-8, np.inf)
-    scipy_flow.start(0.0, np.array([0.3, 0.0, 1.0, 0.5]), 5.0)
-    assert scipy_flow.advance().head is None  # SciPy's continuous output only
+    rk45 = ScipyFlow(_oscillator, "RK45", 1e-6, 1e-8, np.inf)
+    rk45.start(0.0, np.array([0.3, 0.0, 1.0, 0.5]), 5.0)
+    assert rk45.advance().head is None  # SciPy's continuous output only
+
+
+def test_head_of_scipy_dop853_equals_its_continuous_output():
+    flow = ScipyFlow(_oscillator, "DOP853", 1e-6, 1e-8, np.inf)
+    flow.start(0.0, np.array([0.3, 0.0, 1.0, 0.5]), 5.0)
+    for _ in range(3):
+        seg = flow.advance()
+        assert seg.head is not None
+        for k in range(9):
+            t = seg.t0 + (seg.t1 - seg.t0) * k / 8
+            assert seg.head(t, 4) == seg.dense(t).tolist()
+            assert seg.head(t, 1) == seg.dense(t)[:1].tolist()
 
 
 @pytest.mark.parametrize("target", ["numpy", "c"])

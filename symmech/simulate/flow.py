@@ -291,13 +291,14 @@ class ScipyFlow:
         def continuous(tt: float) -> np.ndarray:
             return dense(tt)
 
-        many = None
+        many = head = None
         if type(dense).__name__ == "Dop853DenseOutput":  # element by element, as one call
 
             def many(ts: Sequence[float]) -> np.ndarray:
                 return dense(np.asarray(ts, dtype=float)).T
 
-        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many)
+            head = _dop853_head(dense)
+        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head)
 
     def limit_step(self, h: float) -> None:
         """As :meth:`RKFlow.limit_step` (the next solver's first step)."""
@@ -316,6 +317,33 @@ class ScipyFlow:
         if np.max(np.abs(y - self.solver.y) / scale) < 1:
             return
         self.start(float(self.solver.t), y, self.t_bound)
+
+
+def _dop853_head(dense: Any) -> Callable[[float, int], list[float]] | None:
+    """``head(t, m)`` of SciPy's DOP853 continuous output (:attr:`Segment.head`): the
+    operations of its ``_call_impl`` on each entry (``y = 0``; for the rows of ``F`` in
+    reverse, ``y += F_k`` then ``y *= x`` or ``y *= 1 - x`` alternately; ``y += y_old``,
+    with ``x = (t - t_old) / h``), in float64 as there, so the same values; None if the
+    object does not hold what that rule reads."""
+    try:
+        F, y_old, t_old, h = dense.F, dense.y_old, dense.t_old, dense.h
+    except AttributeError:
+        return None
+    if np.shape(F)[0] != 7 or np.iscomplexobj(F) or np.iscomplexobj(y_old):
+        return None
+    columns: list[tuple[float, ...]] = []
+
+    def head(tt: float, m: int) -> list[float]:
+        if not columns:
+            columns.extend(zip(*np.asarray(F).tolist(), np.asarray(y_old).tolist(), strict=True))
+        x = (tt - t_old) / h
+        x1 = 1 - x
+        return [
+            (((((((0.0 + f6) * x + f5) * x1 + f4) * x + f3) * x1 + f2) * x + f1) * x1 + f0) * x + y0
+            for f0, f1, f2, f3, f4, f5, f6, y0 in columns[:m]
+        ]
+
+    return head
 
 
 class AugmentedFlow:
