@@ -329,8 +329,8 @@ def _dop853_head(dense: Any) -> Callable[[float, int], list[float]] | None:
         F, y_old, t_old, h = dense.F, dense.y_old, dense.t_old, dense.h
     except AttributeError:
         return None
-    if np.shape(F)[0] != 7 or np.iscomplexobj(F) or np.iscomplexobj(y_old):
-        return None
+    if not (len(F) == 7 and F.dtype.char == "d" and y_old.dtype.char == "d"):
+        return None  # only real float64 arithmetic is reproduced
     columns: list[tuple[float, ...]] = []
 
     def head(tt: float, m: int) -> list[float]:
