@@ -127,16 +127,34 @@ class StepSearch:
         times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
         # on a step a few ulps long the samples round onto each other: keep distinct times
         times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
-        states = seg.samples(times)
         vals = [[self.value(i, t0, seg.y0) if s is None else s for i, s in enumerate(self.start)]]
-        evals = self.evals
+        row, evals = self._sampled(times)
         for k in range(1, len(times)):
-            tk, yk = times[k], states[k]
+            tk, yk = times[k], row(k)
             vals.append([g(tk, yk) for g in evals])
             brackets = self._brackets(times, vals, k)
             if brackets:
                 return self._locate(brackets)
         return None
+
+    def _sampled(self, times: list) -> tuple[Any, list[Any]]:
+        """``(row, functions)``: the argument of the event functions at sample ``k``
+        (``row(k)``) and the functions over it.  Where every function is a gap and the
+        step gives its coordinates as floats (``seg.head``), the coordinates (``y1``'s at
+        t1, as :meth:`Segment.samples <symmech.simulate.flow.Segment.samples>`: the same
+        values) and the gaps' rules; else the states and :attr:`evals`."""
+        seg = self.seg
+        head = seg.head
+        if head is None or any(self.force):
+            return seg.samples(times).__getitem__, self.evals
+        n, t1 = self.run.n, seg.t1
+        rules = [self._gap_rule(i) for i in range(len(self.funcs))]
+
+        def row(k: int) -> list[float]:
+            tk = times[k]
+            return seg.y1[:n].tolist() if tk == t1 else head(tk, n)
+
+        return row, rules
 
     def _brackets(self, times: list, vals: list, k: int) -> list[tuple[int, Any, Any, Any, Any]]:
         """The brackets ``(i, lo, hi, g(lo), g(hi))`` of the event functions between
