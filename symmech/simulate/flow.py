@@ -16,11 +16,14 @@ flow from the new state (``start``), keeping the last accepted step size as a hi
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from symmech.simulate.steppers import all_finite
 
 __all__ = ["AugmentedFlow", "FlowFailure", "RKFlow", "ScipyFlow", "Segment"]
 
@@ -112,7 +115,7 @@ class RKFlow:
         """(Re)start at (t, y), integrating towards ``t_bound``."""
         self.t, self.y, self.t_bound = t, np.array(y, dtype=float), t_bound
         self.fy = self._rhs(t, self.y)
-        if not np.all(np.isfinite(self.fy)):
+        if not all_finite(self.fy):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
         if self.fixed_step is not None:
             self.h = self.fixed_step
@@ -153,7 +156,7 @@ class RKFlow:
             jac = self._jac if self.stepper.implicit else None
             st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
             err = st.error
-            finite = np.all(np.isfinite(st.y)) and np.isfinite(err)
+            finite = math.isfinite(err) and all_finite(st.y)
             if not self.stepper.adaptive:
                 if not finite:
                     raise FlowFailure(f"non-finite state after a fixed step at t = {t!r}")
@@ -248,7 +251,7 @@ class ScipyFlow:
         # rhs into a step of nan, which its step loop then shrinks forever
         y = np.array(y, dtype=float)
         self.stats.nfev += 1
-        if not np.all(np.isfinite(self.f(t, y))):
+        if not all_finite(np.asarray(self.f(t, y), dtype=float)):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
         self.solver = self.cls(self.f, t, y, t_bound, **kwargs)
         self.t_bound = t_bound
@@ -278,7 +281,7 @@ class ScipyFlow:
         h = float(s.t) - t0
         if float(s.t) < self.t_bound and h <= floor:
             raise FlowFailure(f"step size {h:.3g} too small at t = {t0!r}")
-        if not (np.all(np.isfinite(s.y))):
+        if not all_finite(s.y):
             raise FlowFailure(f"the right-hand side is not finite at t = {t0!r}")
         self.stats.steps += 1
         self._collect()
