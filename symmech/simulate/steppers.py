@@ -240,16 +240,13 @@ class _Dop853Dense:
         self.owner = owner
 
     def _build(self) -> np.ndarray:
-        x = _DOP853_ARRAYS
         h, y0 = self.h, self._y0
         s = self._K.shape[0]  # 13: the 12 stages and f(t0 + h, y1)
         K = np.empty((s + 3, y0.size))
         K[:s] = self._K
-        for r in range(3):
+        for r, (node, row) in enumerate(_DOP853_EXTRA_STAGES):
             i = s + r
-            K[i] = _rhs(
-                self._f, self.t0 + x["c_extra"][r] * h, y0 + h * x["a_extra"][r, :i].dot(K[:i])
-            )
+            K[i] = _rhs(self._f, self.t0 + node * h, y0 + h * row.dot(K[:i]))
         if self.owner is not None:
             self.owner.nfev += 3
         dy = self._y1 - y0
@@ -257,7 +254,7 @@ class _Dop853Dense:
         F[0] = dy
         F[1] = h * K[0] - dy
         F[2] = 2 * dy - h * (K[0] + K[s - 1])
-        F[3:] = h * x["d"].dot(K)
+        F[3:] = h * _DOP853_ARRAYS["d"].dot(K)
         return F
 
     def __call__(self, theta: float) -> np.ndarray:
@@ -417,6 +414,16 @@ _DOP853_ARRAYS = {
     "a_extra": np.array(DOP853_EXTRAS.a_extra, dtype=object).astype(float),
     "d": np.array(DOP853_EXTRAS.d, dtype=object).astype(float),
 }
+
+#: The three extra stages of DOP853's dense output, taken out once (every step builds
+#: them): the node as a float and the row of coefficients over the stages before it.
+_DOP853_EXTRA_STAGES = [
+    (
+        float(_DOP853_ARRAYS["c_extra"][r]),
+        np.ascontiguousarray(_DOP853_ARRAYS["a_extra"][r, : DOP853.stages + 1 + r]),
+    )
+    for r in range(3)
+]
 
 
 # --- Rodas4 -----------------------------------------------------------------------------
