@@ -240,7 +240,7 @@ class Functions:
                 out[:size] = ydot
                 q, qdot = y[:n], ydot[:n]
                 for k, g in enumerate(gs):
-                    out[size + k] = np.dot(g(q), qdot)
+                    out[size + k] = g(q).dot(qdot)
             except NumericalError:
                 return None
             return out
@@ -297,7 +297,7 @@ class Functions:
         n = self.n
         q = y[:n]
         g = self._call(FREE, self._wall_name("dpsi", wall), t, q)
-        r = float(np.dot(g, ydot[:n]))
+        r = float(g.dot(ydot[:n]))
         if self.moving[wall]:
             r += float(self._call(FREE, self._wall_name("psi_t", wall), t, q))
         return r
