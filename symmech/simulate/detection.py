@@ -14,11 +14,16 @@ normal rate; a wall released and not yet left (banded) through ``psi + tol_psi``
 inside a wall counts as ``psi(t0) = 0`` (a further dip is an event at once), and a wall
 grazed and not left since as inside it.
 
-The interior samples are evaluated at once where the flow can (:meth:`Segment.samples
-<symmech.simulate.flow.Segment.samples>`) and the gaps through the functions' direct
-one-state callers (:meth:`Functions.gap_function
-<symmech.simulate.functions.Functions.gap_function>`): the same values as one call per
-sample, without its per-call conversions.
+The gaps are evaluated through the functions' direct one-state callers
+(:meth:`Functions.gap_function <symmech.simulate.functions.Functions.gap_function>`).  A
+gap reads only the coordinates: where every event function of the step is a gap and the
+step gives the first entries of its continuous output as floats
+(:attr:`Segment.head <symmech.simulate.flow.Segment.head>`), the samples and the probes of
+the root search are those coordinates; otherwise (a contact force reads the velocities)
+the samples are whole states, evaluated at once where the flow can
+(:meth:`Segment.samples <symmech.simulate.flow.Segment.samples>`).  Either way the values
+are the same, bit for bit: only the per-call array work differs (on a step of a small
+system it is most of the search's cost).
 """
 
 from __future__ import annotations
