@@ -16,7 +16,7 @@ dop853 8     7     7      12 stages + 3 lazy dense stages, combined 5th/3rd-orde
 tsit5  5     4     4      7 stages (FSAL)
 rk45   5     4     4      Dormand-Prince, Shampine's dense output, 7 stages (FSAL)
 rk4    4     --    3      fixed step, cubic Hermite dense output, ``error = 0``
-rodas4 4     3     3      L-stable, stiffly accurate Rosenbrock; needs ``jac``
+rodas4 4     3     3      L-stable, stiffly accurate Rosenbrock; needs ``jac`` (:mod:`.rosenbrock`)
 ====== ===== ===== ====== =================================================================
 
 The error norm is ``sqrt(mean((err_i / scale_i)^2))`` with ``scale_i = atol_i + rtol
@@ -293,18 +293,6 @@ class _Dop853Dense:
         return self._y0 + s * acc
 
 
-class _RosenbrockDense:
-    """``(1 - theta) y0 + theta (y1 + (1 - theta)(k1 + theta k2))`` (HNW II, VI.(4.8))."""
-
-    def __init__(self, t0, h, y0, y1, k1, k2):
-        self.t0, self.h = t0, h
-        self._y0, self._y1, self._k1, self._k2 = y0, y1, k1, k2
-
-    def __call__(self, theta: float) -> np.ndarray:
-        s1 = 1 - theta
-        return s1 * self._y0 + theta * (self._y1 + s1 * (self._k1 + theta * self._k2))
-
-
 class _NanDense:
     """Dense output of a failed step (``error = inf``): NaN everywhere."""
 
@@ -426,95 +414,22 @@ _DOP853_EXTRA_STAGES = [
 ]
 
 
-# --- Rodas4 -----------------------------------------------------------------------------
-
-
-def _lu_solver(W: np.ndarray) -> Callable[[np.ndarray], np.ndarray] | None:
-    """A solver for ``W x = r`` (LU once: SciPy's ``lu_factor`` if installed, else NumPy),
-    or None when ``W`` is singular or not finite."""
-    if not np.all(np.isfinite(W)):
-        return None
-    try:
-        from scipy.linalg import lu_factor, lu_solve
-    except ImportError:  # the core needs only NumPy
-        try:
-            inv = np.linalg.inv(W)
-        except np.linalg.LinAlgError:
-            return None
-        return lambda r: inv @ r
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        try:
-            lu = lu_factor(W, check_finite=False)
-        except (np.linalg.LinAlgError, Warning):
-            return None
-    return lambda r: lu_solve(lu, r, check_finite=False)
-
-
-class Rodas4(Stepper):
-    """Rodas4: a 6-stage, L-stable, stiffly accurate Rosenbrock method of order 4(3).
-
-    Each step factors ``W = I/(gamma h) - J`` once (``J = jac(t0, y0)``) and solves six
-    linear systems (see :class:`symmech.simulate.tableaux.RosenbrockTableau`).  ``df/dt``
-    is a forward difference ``(f(t0 + delta, y0) - f0) / delta`` with ``delta =
-    sqrt(eps max(1e-5, |t0|))`` as the code RODAS does (one extra call; zero up to rounding
-    for autonomous problems).  A singular ``W`` gives ``error = inf``.
-    """
-
-    name = "rodas4"
-    implicit = True
-    adaptive = True
-
-    def __init__(self):
-        self.tableau = RODAS4
-        self.order, self.error_order = RODAS4.order, RODAS4.error_order
-        self.dense_order = RODAS4.dense_order
-        self._x = RODAS4.arrays
-
-    def step(self, f, t0, y0, f0, h, rtol, atol, jac=None) -> Step:
-        h = _check_h(h)
-        if jac is None:
-            raise StepperError("rodas4 is implicit: step() needs jac(t, y), the Jacobian df/dy")
-        y0 = np.asarray(y0, dtype=float)
-        f0 = np.asarray(f0, dtype=float)
-        n = y0.size
-        J = np.asarray(jac(t0, y0), dtype=float)
-        if J.shape != (n, n):
-            raise StepperError(f"jac(t, y) returned shape {J.shape} for a state of size {n}")
-        x = self._x
-        delta = math.sqrt(np.finfo(float).eps * max(1e-5, abs(t0)))
-        ft = (_rhs(f, t0 + delta, y0) - f0) / delta
-        nfev = 1
-        solve = _lu_solver(np.eye(n) / (float(x["gamma"]) * h) - J)
-        if solve is None:
-            return Step(
-                np.full(n, np.nan), np.full(n, np.nan), math.inf, _NanDense(t0, h, n), nfev, 1
-            )
-        a, C, c, d = x["a"], x["C"], x["c"], x["d"]
-        U = np.zeros((6, n))
-        for i in range(6):
-            fi = f0 if i == 0 else _rhs(f, t0 + c[i] * h, y0 + a[i, :i] @ U[:i])
-            nfev += i > 0
-            U[i] = solve(fi + (C[i, :i] @ U[:i]) / h + (h * d[i]) * ft)
-        y1 = y0 + x["b"] @ U
-        f1 = _rhs(f, t0 + h, y1)
-        nfev += 1
-        error = _rms(((x["b"] - x["bhat"]) @ U) / _scale(y0, y1, rtol, atol))
-        error = _finite_or_inf(error, y1, f1)
-        dense = _RosenbrockDense(t0, h, y0, y1, x["h"][0] @ U, x["h"][1] @ U)
-        return Step(y1, f1, error, dense, nfev, 1)
-
-
 # --- registry, initial step, controller ------------------------------------------------
+
+
+def _rodas4() -> Stepper:
+    """Rodas4 (:mod:`symmech.simulate.rosenbrock`, which builds on this module)."""
+    from symmech.simulate.rosenbrock import Rodas4
+
+    return Rodas4()
+
 
 _FACTORIES: dict[str, Callable[[], Stepper]] = {
     "dop853": Dop853,
     "tsit5": lambda: ExplicitRK(TSIT5),
     "rk45": lambda: ExplicitRK(RK45),
     "rk4": ClassicalRK4,
-    "rodas4": Rodas4,
+    "rodas4": _rodas4,
 }
 #: every method name :func:`stepper` accepts
 METHODS: tuple[str, ...] = tuple(_FACTORIES)
