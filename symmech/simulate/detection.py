@@ -14,11 +14,16 @@ normal rate; a wall released and not yet left (banded) through ``psi + tol_psi``
 inside a wall counts as ``psi(t0) = 0`` (a further dip is an event at once), and a wall
 grazed and not left since as inside it.
 
-The interior samples are evaluated at once where the flow can (:meth:`Segment.samples
-<symmech.simulate.flow.Segment.samples>`) and the gaps through the functions' direct
-one-state callers (:meth:`Functions.gap_function
-<symmech.simulate.functions.Functions.gap_function>`): the same values as one call per
-sample, without its per-call conversions.
+The gaps are evaluated through the functions' direct one-state callers
+(:meth:`Functions.gap_function <symmech.simulate.functions.Functions.gap_function>`).  A
+gap reads only the coordinates: where every event function of the step is a gap and the
+step gives the first entries of its continuous output as floats
+(:attr:`Segment.head <symmech.simulate.flow.Segment.head>`), the samples and the probes of
+the root search are those coordinates; otherwise (a contact force reads the velocities)
+the samples are whole states, evaluated at once where the flow can
+(:meth:`Segment.samples <symmech.simulate.flow.Segment.samples>`).  Either way the values
+are the same, bit for bit: only the per-call array work differs (on a step of a small
+system it is most of the search's cost).
 """
 
 from __future__ import annotations
@@ -50,9 +55,14 @@ class StepSearch:
         self.divided: list[bool] = []
         self.start: list[Any] = []
         self.band: list[bool] = []
+        #: per event function: whether it is a contact force (a force's sign change is
+        #: ``g > 0 -> g <= 0``, a gap's ``g >= 0 -> g < 0``), and its evaluation at (t, y)
+        self.force = [what == "release" for _, what in self.funcs]
+        self.evals: list[Any] = []
         self.gaps = [self.f.gap_function(w) if what == "wall" else None for w, what in self.funcs]
         for (w, what), gap in zip(self.funcs, self.gaps, strict=True):
             self._prepare(w, what, gap)
+            self.evals.append(self._evaluation(len(self.evals)))
 
     def _prepare(self, w: int, what: str, gap: Any) -> None:
         """The search rule of event function ``(w, what)`` and its value at t0 (None: to be
@@ -82,53 +92,85 @@ class StepSearch:
 
     def value(self, i: int, t: Any, y: np.ndarray) -> Any:
         """Event function ``i`` at (t, y)."""
+        return self.evals[i](t, y)
+
+    def _evaluation(self, i: int) -> Any:
+        """``(t, y) ->`` event function ``i`` (its rule fixed by :meth:`_prepare`): a held
+        wall's normal force, or the gap, plus ``tol_psi`` when banded, divided by
+        ``t - t0`` when divided."""
         w, what = self.funcs[i]
-        run = self.run
+        run, n = self.run, self.run.n
         if what == "release":
-            n = run.n
-            return self.f.normal_force(w, t, y[:n], y[n:], run.mode)
+            force, mode = self.f.normal_force, run.mode
+            return lambda t, y: force(w, t, y[:n], y[n:], mode)
+        rule = self._gap_rule(i)
+        return lambda t, y: rule(t, y[:n])
+
+    def _gap_rule(self, i: int) -> Any:
+        """``(t, q) ->`` event function ``i``, a gap: psi, plus ``tol_psi`` when banded,
+        divided by ``t - t0`` when divided (``q`` an array or a list of floats)."""
         gap = self.gaps[i]
         assert gap is not None
-        psi = gap(t, y[: run.n])
         if self.band[i]:
-            psi = psi + run.tol_psi
-        return psi / (t - self.seg.t0) if self.divided[i] else psi
+            tol = self.run.tol_psi
+            return lambda t, q: gap(t, q) + tol
+        if self.divided[i]:
+            t0 = self.seg.t0
+            return lambda t, q: gap(t, q) / (t - t0)
+        return gap
 
     def state(self, t: Any) -> np.ndarray:
         seg = self.seg
         return seg.y0 if t == seg.t0 else seg.y1 if t == seg.t1 else seg.dense(t)
 
-    def _crossed(self, i: int, a: Any, b: Any) -> bool:
-        return (a > 0 >= b) if self.funcs[i][1] == "release" else (a >= 0 > b)
-
     def earliest(self) -> Found | None:
         """The earliest event inside the step, or None."""
         if not self.funcs:
             return None
-        seg, count = self.seg, len(self.funcs)
+        seg = self.seg
         t0, K = seg.t0, self.run.o.samples
         times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
         # on a step a few ulps long the samples round onto each other: keep distinct times
         times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
-        states = seg.samples(times)
         vals = [[self.value(i, t0, seg.y0) if s is None else s for i, s in enumerate(self.start)]]
+        row, evals = self._sampled(times)
         for k in range(1, len(times)):
-            tk, yk = times[k], states[k]
-            vals.append([self.value(i, tk, yk) for i in range(count)])
+            tk, yk = times[k], row(k)
+            vals.append([g(tk, yk) for g in evals])
             brackets = self._brackets(times, vals, k)
             if brackets:
                 return self._locate(brackets)
         return None
 
+    def _sampled(self, times: list) -> tuple[Any, list[Any]]:
+        """``(row, functions)``: the argument of the event functions at sample ``k``
+        (``row(k)``) and the functions over it.  Where every function is a gap and the
+        step gives its coordinates as floats (``seg.head``), the coordinates (``y1``'s at
+        t1, as :meth:`Segment.samples <symmech.simulate.flow.Segment.samples>`: the same
+        values) and the gaps' rules; else the states and :attr:`evals`."""
+        seg = self.seg
+        head = seg.head
+        if head is None or any(self.force):
+            return seg.samples(times).__getitem__, self.evals
+        n, t1 = self.run.n, seg.t1
+        rules = [self._gap_rule(i) for i in range(len(self.funcs))]
+
+        def row(k: int) -> list[float]:
+            tk = times[k]
+            return seg.y1[:n].tolist() if tk == t1 else head(tk, n)
+
+        return row, rules
+
     def _brackets(self, times: list, vals: list, k: int) -> list[tuple[int, Any, Any, Any, Any]]:
         """The brackets ``(i, lo, hi, g(lo), g(hi))`` of the event functions between
         samples ``k - 1`` and ``k`` (a sign change, or a gap's dip below zero)."""
         out = []
+        force = self.force
         for i in range(len(self.funcs)):
             a, b = vals[k - 1][i], vals[k][i]
-            if self._crossed(i, a, b):
+            if (a > 0 >= b) if force[i] else (a >= 0 > b):
                 out.append((i, times[k - 1], times[k], a, b))
-            elif k >= 2 and a <= b and a <= vals[k - 2][i] and self.funcs[i][1] == "wall":
+            elif k >= 2 and a <= b and not force[i] and a <= vals[k - 2][i]:
                 # a local minimum at sample k - 1 (parabola_dip's own first test)
                 tv = parabola_dip(times[k - 2 : k + 1], [vals[j][i] for j in (k - 2, k - 1, k)])
                 if tv is not None:
@@ -142,12 +184,10 @@ class StepSearch:
 
     def _locate(self, brackets: list[tuple[int, Any, Any, Any, Any]]) -> Found:
         """The earliest root over the brackets (each narrowed on the continuous output)."""
-        seg, run = self.seg, self.run
+        run = self.run
         best: Found | None = None
         for i, lo, hi, glo, ghi in brackets:
-
-            def g(t: Any, i: int = i) -> Any:
-                return self.value(i, t, seg.dense(t))
+            g = self._root_function(i)
 
             if ghi == 0:  # a contact force reaching exactly zero at the sample
                 a = hi
@@ -158,6 +198,17 @@ class StepSearch:
                 best = (a, self.state(a), *self.funcs[i])
         assert best is not None
         return best
+
+    def _root_function(self, i: int) -> Any:
+        """``t ->`` event function ``i`` on the step's continuous output; a gap through the
+        coordinates alone where the step gives them as floats (``seg.head``: the same
+        values, without building the whole state at every probe of the root search)."""
+        seg = self.seg
+        head = seg.head
+        if head is None or self.force[i]:
+            return lambda t: self.value(i, t, seg.dense(t))
+        rule, n = self._gap_rule(i), self.run.n
+        return lambda t: rule(t, head(t, n))
 
     def polish(self, i: int, a: Any, b: Any, ga: Any, gb: Any) -> Any:
         """The event time found on the step's continuous output; where the step can

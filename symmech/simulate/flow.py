@@ -16,11 +16,14 @@ flow from the new state (``start``), keeping the last accepted step size as a hi
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from symmech.simulate.steppers import all_finite
 
 __all__ = ["AugmentedFlow", "FlowFailure", "RKFlow", "ScipyFlow", "Segment"]
 
@@ -38,7 +41,9 @@ class FlowFailure(RuntimeError):
 class Segment:
     """One accepted step from ``t0`` to ``t1``: end states, the derivative at ``t1``, and
     ``dense(t)`` for t in [t0, t1]; ``many(ts)``, where the flow has it, is ``dense`` at
-    the times ``ts`` at once (rows of an array: the same values, element by element)."""
+    the times ``ts`` at once (rows of an array: the same values, element by element), and
+    ``head(t, m)`` the first ``m`` entries of ``dense(t)`` as a list of floats (the same
+    values)."""
 
     t0: float
     t1: float
@@ -47,6 +52,7 @@ class Segment:
     f1: np.ndarray | None
     dense: Callable[[float], np.ndarray]
     many: Callable[[Sequence[float]], np.ndarray] | None = None
+    head: Callable[[float, int], list[float]] | None = None
 
     def samples(self, times: Sequence[Any]) -> list[np.ndarray]:
         """The states at ``times`` (in [t0, t1]): ``y0`` at t0, ``y1`` at t1, the
@@ -109,7 +115,7 @@ class RKFlow:
         """(Re)start at (t, y), integrating towards ``t_bound``."""
         self.t, self.y, self.t_bound = t, np.array(y, dtype=float), t_bound
         self.fy = self._rhs(t, self.y)
-        if not np.all(np.isfinite(self.fy)):
+        if not all_finite(self.fy):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
         if self.fixed_step is not None:
             self.h = self.fixed_step
@@ -150,7 +156,7 @@ class RKFlow:
             jac = self._jac if self.stepper.implicit else None
             st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
             err = st.error
-            finite = np.all(np.isfinite(st.y)) and np.isfinite(err)
+            finite = math.isfinite(err) and all_finite(st.y)
             if not self.stepper.adaptive:
                 if not finite:
                     raise FlowFailure(f"non-finite state after a fixed step at t = {t!r}")
@@ -177,13 +183,18 @@ class RKFlow:
         def dense(tt: float, _d: Any = dense_step, _t0: float = t, _h: float = h) -> np.ndarray:
             return _d((tt - _t0) / _h)
 
-        many = None
+        many = head = None
         if hasattr(dense_step, "many"):
 
             def many(ts: Sequence[float], _d: Any = dense_step, _t0: float = t, _h: float = h):
                 return _d.many((np.asarray(ts, dtype=float) - _t0) / _h)
 
-        seg = Segment(t, t1, y, st.y, st.f, dense, many)
+        if hasattr(dense_step, "head"):
+
+            def head(tt: float, m: int, _d: Any = dense_step, _t0: float = t, _h: float = h):
+                return _d.head((tt - _t0) / _h, m)
+
+        seg = Segment(t, t1, y, st.y, st.f, dense, many, head)
         self.t, self.y, self.fy = t1, st.y, st.f
         return seg
 
@@ -240,7 +251,7 @@ class ScipyFlow:
         # rhs into a step of nan, which its step loop then shrinks forever
         y = np.array(y, dtype=float)
         self.stats.nfev += 1
-        if not np.all(np.isfinite(self.f(t, y))):
+        if not all_finite(np.asarray(self.f(t, y), dtype=float)):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
         self.solver = self.cls(self.f, t, y, t_bound, **kwargs)
         self.t_bound = t_bound
@@ -270,7 +281,7 @@ class ScipyFlow:
         h = float(s.t) - t0
         if float(s.t) < self.t_bound and h <= floor:
             raise FlowFailure(f"step size {h:.3g} too small at t = {t0!r}")
-        if not (np.all(np.isfinite(s.y))):
+        if not all_finite(s.y):
             raise FlowFailure(f"the right-hand side is not finite at t = {t0!r}")
         self.stats.steps += 1
         self._collect()
@@ -283,13 +294,14 @@ class ScipyFlow:
         def continuous(tt: float) -> np.ndarray:
             return dense(tt)
 
-        many = None
+        many = head = None
         if type(dense).__name__ == "Dop853DenseOutput":  # element by element, as one call
 
             def many(ts: Sequence[float]) -> np.ndarray:
                 return dense(np.asarray(ts, dtype=float)).T
 
-        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many)
+            head = _dop853_head(dense)
+        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head)
 
     def limit_step(self, h: float) -> None:
         """As :meth:`RKFlow.limit_step` (the next solver's first step)."""
@@ -308,6 +320,33 @@ class ScipyFlow:
         if np.max(np.abs(y - self.solver.y) / scale) < 1:
             return
         self.start(float(self.solver.t), y, self.t_bound)
+
+
+def _dop853_head(dense: Any) -> Callable[[float, int], list[float]] | None:
+    """``head(t, m)`` of SciPy's DOP853 continuous output (:attr:`Segment.head`): the
+    operations of its ``_call_impl`` on each entry (``y = 0``; for the rows of ``F`` in
+    reverse, ``y += F_k`` then ``y *= x`` or ``y *= 1 - x`` alternately; ``y += y_old``,
+    with ``x = (t - t_old) / h``), in float64 as there, so the same values; None if the
+    object does not hold what that rule reads."""
+    try:
+        F, y_old, t_old, h = dense.F, dense.y_old, dense.t_old, dense.h
+    except AttributeError:
+        return None
+    if not (len(F) == 7 and F.dtype.char == "d" and y_old.dtype.char == "d"):
+        return None  # only real float64 arithmetic is reproduced
+    columns: list[tuple[float, ...]] = []
+
+    def head(tt: float, m: int) -> list[float]:
+        if not columns:
+            columns.extend(zip(*np.asarray(F).tolist(), np.asarray(y_old).tolist(), strict=True))
+        x = (tt - t_old) / h
+        x1 = 1 - x
+        return [
+            (((((((0.0 + f6) * x + f5) * x1 + f4) * x + f3) * x1 + f2) * x + f1) * x1 + f0) * x + y0
+            for f0, f1, f2, f3, f4, f5, f6, y0 in columns[:m]
+        ]
+
+    return head
 
 
 class AugmentedFlow:
@@ -381,7 +420,8 @@ class AugmentedFlow:
                 return _m(ts)[:, :k]
 
         f1 = None if seg.f1 is None else seg.f1[:k]
-        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many)
+        # the first m <= k entries of the augmented state are those of the loop's
+        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many, seg.head)
 
     def limit_step(self, h: float) -> None:
         self.inner.limit_step(h)

@@ -24,6 +24,9 @@ __all__ = ["Functions"]
 
 _UNSET: Any = object()
 
+#: How many normal rates :meth:`Functions.normal_rate` keeps (then it starts afresh).
+_RATES_KEPT = 64
+
 
 class Functions:
     """The evaluations the hybrid loop makes, over a :class:`HybridSystem` at fixed
@@ -83,7 +86,9 @@ class Functions:
         self._walls: dict[tuple[str, int], str] = {}
         #: mode -> the fused augmented right-hand side (None: the general path)
         self._kernels: dict[Mode, Callable[[float, np.ndarray], np.ndarray | None] | None] = {}
-        self._gaps: dict[int, Callable[[float, np.ndarray], float]] = {}
+        self._gaps: dict[int, Callable[[float, Any], float]] = {}
+        #: (wall, t, the state's bytes) -> normal rate (:meth:`normal_rate`)
+        self._rates: dict[tuple[int, float, bytes], float] = {}
 
     # -- plumbing -------------------------------------------------------------------------
     def _module(self, mode: Mode) -> SceneModule | None:
@@ -113,7 +118,12 @@ class Functions:
             spec = {f.name: f for f in mod.code.functions}.get(name)
             if spec is None:  # not generated: the module's call explains
                 return mod.call(name, *state, params=self._pvec(mode))
-            entry = self._bound[key] = (getattr(bound, name), spec.takes_time)
+            fn = getattr(bound, name)
+            plain = None if spec.takes_time else bound.plain(name)
+            if plain is not None:
+                sizes = {"y": 2 * self.n, "q": self.n, "v": self.n}
+                fn = _point(plain, fn, [sizes[a] for a in spec.state], spec.out_shape)
+            entry = self._bound[key] = (fn, spec.takes_time)
         fn, takes_t = entry
         return fn(*state, t=t) if takes_t else fn(*state)
 
@@ -230,32 +240,33 @@ class Functions:
                 out[:size] = ydot
                 q, qdot = y[:n], ydot[:n]
                 for k, g in enumerate(gs):
-                    out[size + k] = np.dot(g(q), qdot)
+                    out[size + k] = g(q).dot(qdot)
             except NumericalError:
                 return None
             return out
 
         return arrays
 
-    def gap_function(self, wall: int) -> Callable[[float, np.ndarray], float]:
-        """``(t, q) -> psi`` of ``wall``: :meth:`psi` through its direct caller where
-        there is one (the event search samples it many times a step)."""
+    def gap_function(self, wall: int) -> Callable[[float, Any], float]:
+        """``(t, q) -> psi`` of ``wall`` (``q`` an array or a list of floats): :meth:`psi`
+        through its direct caller where there is one (the event search samples it many
+        times a step)."""
         fn = self._gaps.get(wall)
         if fn is None:
             fn = self._gaps[wall] = self._gap_function(wall)
         return fn
 
-    def _gap_function(self, wall: int) -> Callable[[float, np.ndarray], float]:
+    def _gap_function(self, wall: int) -> Callable[[float, Any], float]:
         direct = self._direct(FREE, self._wall_name("psi", wall))
         psi = self.psi
         if direct is None:
-            return lambda t, q: psi(wall, t, q)
+            return lambda t, q: psi(wall, t, np.asarray(q, dtype=float))
         fn, plain = direct
         if plain:
 
-            def over_lists(t: float, q: np.ndarray) -> float:
-                out = fn(q.tolist())
-                return out[0] if out is not None else psi(wall, t, q)
+            def over_lists(t: float, q: np.ndarray | list[float]) -> float:
+                out = fn(q if isinstance(q, list) else q.tolist())
+                return out[0] if out is not None else psi(wall, t, np.asarray(q, dtype=float))
 
             return over_lists
 
@@ -286,14 +297,24 @@ class Functions:
         n = self.n
         q = y[:n]
         g = self._call(FREE, self._wall_name("dpsi", wall), t, q)
-        r = float(np.dot(g, ydot[:n]))
+        r = float(g.dot(ydot[:n]))
         if self.moving[wall]:
             r += float(self._call(FREE, self._wall_name("psi_t", wall), t, q))
         return r
 
     def normal_rate(self, wall: int, t: float, y: np.ndarray) -> float:
-        """d psi/dt at a state (q_dot from the kinematics of the free flow)."""
-        return self.rate(wall, t, y, self.rhs(FREE, t, y))
+        """d psi/dt at a state (q_dot from the kinematics of the free flow).  The loop asks
+        for it at one state several times (an impact's checks before and after it, the
+        next step's search): the values at the last few states are kept."""
+        if type(y) is not np.ndarray or y.dtype.char != "d":
+            return self.rate(wall, t, y, self.rhs(FREE, t, y))
+        key = (wall, t, y.tobytes())
+        rate = self._rates.get(key)
+        if rate is None:
+            if len(self._rates) >= _RATES_KEPT:
+                self._rates.clear()
+            rate = self._rates[key] = self.rate(wall, t, y, self.rhs(FREE, t, y))
+        return rate
 
     def rate_change(self, wall: int, t: float, q: np.ndarray, dv: np.ndarray) -> float:
         """``dpsi S dv``: the change of the wall's normal rate for a velocity change
@@ -363,3 +384,49 @@ class Functions:
             return float(self.system.locked_force(mode)(t, q, p)[mode.index(wall)])
         lam = self._call(mode, "multipliers", t, q, v)
         return float(lam[self.system.normal_index(mode, wall)])
+
+
+def _point(
+    plain: Callable[..., list | None],
+    general: Callable[..., np.ndarray],
+    sizes: list[int],
+    shape: tuple[int, ...],
+) -> Callable[..., Any]:
+    """A generated function of the state at one point: its one-state variant over the
+    states as lists of floats (``plain``, :meth:`BoundModule.plain
+    <symmech.codegen.bound.BoundModule.plain>`), the same operations and values as the
+    bound attribute ``general`` without its layers of argument checks (a scalar output as
+    a float); ``general`` for anything but float64 vectors of the state's ``sizes``, or
+    where the variant fails (it explains)."""
+    shapes = [(k,) for k in sizes]
+
+    def output(out: list) -> Any:
+        if not shape:
+            return out[0]
+        return np.array(out) if len(shape) == 1 else np.array(out).reshape(shape)
+
+    if len(shapes) == 1:  # the common case, unrolled: one state array
+        (only,) = shapes
+
+        def call1(a: np.ndarray) -> Any:
+            if type(a) is np.ndarray and a.shape == only and a.dtype.char == "d":
+                out = plain(a.tolist())
+                if out is not None:
+                    return output(out)
+            return general(a)
+
+        return call1
+
+    def call(*state: np.ndarray) -> Any:
+        if len(state) == len(shapes):
+            lists = []
+            for a, k in zip(state, shapes, strict=True):
+                if type(a) is not np.ndarray or a.shape != k or a.dtype.char != "d":
+                    return general(*state)
+                lists.append(a.tolist())
+            out = plain(*lists)
+            if out is not None:
+                return output(out)
+        return general(*state)
+
+    return call

@@ -16,7 +16,7 @@ dop853 8     7     7      12 stages + 3 lazy dense stages, combined 5th/3rd-orde
 tsit5  5     4     4      7 stages (FSAL)
 rk45   5     4     4      Dormand-Prince, Shampine's dense output, 7 stages (FSAL)
 rk4    4     --    3      fixed step, cubic Hermite dense output, ``error = 0``
-rodas4 4     3     3      L-stable, stiffly accurate Rosenbrock; needs ``jac``
+rodas4 4     3     3      L-stable, stiffly accurate Rosenbrock; needs ``jac`` (:mod:`.rosenbrock`)
 ====== ===== ===== ====== =================================================================
 
 The error norm is ``sqrt(mean((err_i / scale_i)^2))`` with ``scale_i = atol_i + rtol
@@ -45,6 +45,7 @@ __all__ = [
     "Step",
     "Stepper",
     "StepperError",
+    "all_finite",
     "c_tableau",
     "check_tolerances",
     "initial_step",
@@ -111,8 +112,16 @@ def _scale(y0: np.ndarray, y1: np.ndarray, rtol: float, atol) -> np.ndarray:
     return atol + rtol * np.maximum(np.abs(y0), np.abs(y1))
 
 
+def all_finite(a: np.ndarray) -> bool:
+    """Whether every entry of ``a`` is finite: a finite sum of the entries is the cheap
+    proof (an inf or a NaN makes any sum non-finite); a sum that overflows is settled
+    entry by entry."""
+    return math.isfinite(a.sum()) or bool(np.isfinite(a).all())
+
+
 def _finite_or_inf(error: float, *arrays: np.ndarray) -> float:
-    if not math.isfinite(error) or not all(np.all(np.isfinite(a)) for a in arrays):
+    """``error``, or inf when it or an entry of ``arrays`` is not finite."""
+    if not math.isfinite(error) or not all(all_finite(a) for a in arrays):
         return math.inf
     return error
 
@@ -227,19 +236,17 @@ class _Dop853Dense:
         self.t0, self.h = t0, h
         self._f, self._y0, self._y1, self._K = f, y0, y1, K
         self._F: np.ndarray | None = None
+        self._columns: list[tuple[float, ...]] | None = None
         self.owner = owner
 
     def _build(self) -> np.ndarray:
-        x = _DOP853_ARRAYS
         h, y0 = self.h, self._y0
         s = self._K.shape[0]  # 13: the 12 stages and f(t0 + h, y1)
         K = np.empty((s + 3, y0.size))
         K[:s] = self._K
-        for r in range(3):
+        for r, (node, row) in enumerate(_DOP853_EXTRA_STAGES):
             i = s + r
-            K[i] = _rhs(
-                self._f, self.t0 + x["c_extra"][r] * h, y0 + h * (x["a_extra"][r, :i] @ K[:i])
-            )
+            K[i] = _rhs(self._f, self.t0 + node * h, y0 + h * row.dot(K[:i]))
         if self.owner is not None:
             self.owner.nfev += 3
         dy = self._y1 - y0
@@ -247,7 +254,7 @@ class _Dop853Dense:
         F[0] = dy
         F[1] = h * K[0] - dy
         F[2] = 2 * dy - h * (K[0] + K[s - 1])
-        F[3:] = h * (x["d"] @ K)
+        F[3:] = h * _DOP853_ARRAYS["d"].dot(K)
         return F
 
     def __call__(self, theta: float) -> np.ndarray:
@@ -259,6 +266,21 @@ class _Dop853Dense:
             acc = F[k] + (s1 if k % 2 == 0 else s) * acc
         return self._y0 + s * acc
 
+    def head(self, theta: float, m: int) -> list[float]:
+        """The first ``m`` entries of ``self(theta)`` as floats, by the same operations on
+        each entry (float64 arithmetic, entry by entry, is the same in Python and NumPy):
+        a root search evaluates one gap of the coordinates many times, and for a few
+        entries the arrays' per-operation cost is most of the work."""
+        if self._columns is None:
+            if self._F is None:
+                self._F = self._build()
+            self._columns = list(zip(*self._F.tolist(), self._y0.tolist(), strict=True))
+        s, s1 = theta, 1 - theta
+        return [
+            y0 + s * (f0 + s1 * (f1 + s * (f2 + s1 * (f3 + s * (f4 + s1 * (f5 + s * f6))))))
+            for f0, f1, f2, f3, f4, f5, f6, y0 in self._columns[:m]
+        ]
+
     def many(self, thetas: np.ndarray) -> np.ndarray:
         """``self(theta)`` for each theta, as the rows of an array (the same operations)."""
         if self._F is None:
@@ -269,18 +291,6 @@ class _Dop853Dense:
         for k in range(5, -1, -1):
             acc = F[k] + (s1 if k % 2 == 0 else s) * acc
         return self._y0 + s * acc
-
-
-class _RosenbrockDense:
-    """``(1 - theta) y0 + theta (y1 + (1 - theta)(k1 + theta k2))`` (HNW II, VI.(4.8))."""
-
-    def __init__(self, t0, h, y0, y1, k1, k2):
-        self.t0, self.h = t0, h
-        self._y0, self._y1, self._k1, self._k2 = y0, y1, k1, k2
-
-    def __call__(self, theta: float) -> np.ndarray:
-        s1 = 1 - theta
-        return s1 * self._y0 + theta * (self._y1 + s1 * (self._k1 + theta * self._k2))
 
 
 class _NanDense:
@@ -311,7 +321,9 @@ class ExplicitRK(Stepper):
         arrays = tableau.arrays
         self._c, self._a, self._b = arrays["c"], arrays["a"], arrays["b"]
         self._e, self._P = arrays["e"], arrays["dense"]
-        # the rows of a and the nodes, taken out once (the stage loop runs every step)
+        # the rows of a and the nodes, taken out once (the stage loop runs every step);
+        # the stages combine through ndarray.dot, the same BLAS product as ``@`` at half
+        # its call overhead on these small arrays
         self._rows = [np.ascontiguousarray(self._a[i, :i]) for i in range(tableau.stages)]
         self._nodes = [float(c) for c in self._c]
 
@@ -322,13 +334,13 @@ class ExplicitRK(Stepper):
         K[0] = f0
         rows, nodes = self._rows, self._nodes
         for i in range(1, s):
-            K[i] = _rhs(f, t0 + nodes[i] * h, y0 + h * (rows[i] @ K[:i]))
-        y1 = y0 + h * (self._b @ K[:s])
+            K[i] = _rhs(f, t0 + nodes[i] * h, y0 + h * rows[i].dot(K[:i]))
+        y1 = y0 + h * self._b.dot(K[:s])
         K[s] = _rhs(f, t0 + h, y1)
         return K, y1
 
     def _error(self, K, h, y0, y1, rtol, atol) -> float:
-        return _rms(h * (self._e @ K) / _scale(y0, y1, rtol, atol))
+        return _rms(h * self._e.dot(K) / _scale(y0, y1, rtol, atol))
 
     def _dense(self, f, t0, h, y0, y1, K) -> Dense:
         return _PolyDense(t0, h, y0, h * (K.T @ self._P))
@@ -361,9 +373,9 @@ class Dop853(ExplicitRK):
 
     def _error(self, K, h, y0, y1, rtol, atol) -> float:
         scale = _scale(y0, y1, rtol, atol)
-        e5 = (self._e @ K) / scale
-        e3 = (self._e3 @ K) / scale
-        n5, n3 = float(e5 @ e5), float(e3 @ e3)
+        e5 = self._e.dot(K) / scale
+        e3 = self._e3.dot(K) / scale
+        n5, n3 = float(e5.dot(e5)), float(e3.dot(e3))
         if n5 == 0.0 and n3 == 0.0:
             return 0.0
         return abs(h) * n5 / math.sqrt((n5 + 0.01 * n3) * y0.size)
@@ -391,96 +403,33 @@ _DOP853_ARRAYS = {
     "d": np.array(DOP853_EXTRAS.d, dtype=object).astype(float),
 }
 
-
-# --- Rodas4 -----------------------------------------------------------------------------
-
-
-def _lu_solver(W: np.ndarray) -> Callable[[np.ndarray], np.ndarray] | None:
-    """A solver for ``W x = r`` (LU once: SciPy's ``lu_factor`` if installed, else NumPy),
-    or None when ``W`` is singular or not finite."""
-    if not np.all(np.isfinite(W)):
-        return None
-    try:
-        from scipy.linalg import lu_factor, lu_solve
-    except ImportError:  # the core needs only NumPy
-        try:
-            inv = np.linalg.inv(W)
-        except np.linalg.LinAlgError:
-            return None
-        return lambda r: inv @ r
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        try:
-            lu = lu_factor(W, check_finite=False)
-        except (np.linalg.LinAlgError, Warning):
-            return None
-    return lambda r: lu_solve(lu, r, check_finite=False)
-
-
-class Rodas4(Stepper):
-    """Rodas4: a 6-stage, L-stable, stiffly accurate Rosenbrock method of order 4(3).
-
-    Each step factors ``W = I/(gamma h) - J`` once (``J = jac(t0, y0)``) and solves six
-    linear systems (see :class:`symmech.simulate.tableaux.RosenbrockTableau`).  ``df/dt``
-    is a forward difference ``(f(t0 + delta, y0) - f0) / delta`` with ``delta =
-    sqrt(eps max(1e-5, |t0|))`` as the code RODAS does (one extra call; zero up to rounding
-    for autonomous problems).  A singular ``W`` gives ``error = inf``.
-    """
-
-    name = "rodas4"
-    implicit = True
-    adaptive = True
-
-    def __init__(self):
-        self.tableau = RODAS4
-        self.order, self.error_order = RODAS4.order, RODAS4.error_order
-        self.dense_order = RODAS4.dense_order
-        self._x = RODAS4.arrays
-
-    def step(self, f, t0, y0, f0, h, rtol, atol, jac=None) -> Step:
-        h = _check_h(h)
-        if jac is None:
-            raise StepperError("rodas4 is implicit: step() needs jac(t, y), the Jacobian df/dy")
-        y0 = np.asarray(y0, dtype=float)
-        f0 = np.asarray(f0, dtype=float)
-        n = y0.size
-        J = np.asarray(jac(t0, y0), dtype=float)
-        if J.shape != (n, n):
-            raise StepperError(f"jac(t, y) returned shape {J.shape} for a state of size {n}")
-        x = self._x
-        delta = math.sqrt(np.finfo(float).eps * max(1e-5, abs(t0)))
-        ft = (_rhs(f, t0 + delta, y0) - f0) / delta
-        nfev = 1
-        solve = _lu_solver(np.eye(n) / (float(x["gamma"]) * h) - J)
-        if solve is None:
-            return Step(
-                np.full(n, np.nan), np.full(n, np.nan), math.inf, _NanDense(t0, h, n), nfev, 1
-            )
-        a, C, c, d = x["a"], x["C"], x["c"], x["d"]
-        U = np.zeros((6, n))
-        for i in range(6):
-            fi = f0 if i == 0 else _rhs(f, t0 + c[i] * h, y0 + a[i, :i] @ U[:i])
-            nfev += i > 0
-            U[i] = solve(fi + (C[i, :i] @ U[:i]) / h + (h * d[i]) * ft)
-        y1 = y0 + x["b"] @ U
-        f1 = _rhs(f, t0 + h, y1)
-        nfev += 1
-        error = _rms(((x["b"] - x["bhat"]) @ U) / _scale(y0, y1, rtol, atol))
-        error = _finite_or_inf(error, y1, f1)
-        dense = _RosenbrockDense(t0, h, y0, y1, x["h"][0] @ U, x["h"][1] @ U)
-        return Step(y1, f1, error, dense, nfev, 1)
+#: The three extra stages of DOP853's dense output, taken out once (every step builds
+#: them): the node as a float and the row of coefficients over the stages before it.
+_DOP853_EXTRA_STAGES = [
+    (
+        float(_DOP853_ARRAYS["c_extra"][r]),
+        np.ascontiguousarray(_DOP853_ARRAYS["a_extra"][r, : DOP853.stages + 1 + r]),
+    )
+    for r in range(3)
+]
 
 
 # --- registry, initial step, controller ------------------------------------------------
+
+
+def _rodas4() -> Stepper:
+    """Rodas4 (:mod:`symmech.simulate.rosenbrock`, which builds on this module)."""
+    from symmech.simulate.rosenbrock import Rodas4
+
+    return Rodas4()
+
 
 _FACTORIES: dict[str, Callable[[], Stepper]] = {
     "dop853": Dop853,
     "tsit5": lambda: ExplicitRK(TSIT5),
     "rk45": lambda: ExplicitRK(RK45),
     "rk4": ClassicalRK4,
-    "rodas4": Rodas4,
+    "rodas4": _rodas4,
 }
 #: every method name :func:`stepper` accepts
 METHODS: tuple[str, ...] = tuple(_FACTORIES)
