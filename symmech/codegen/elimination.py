@@ -36,10 +36,17 @@ def _name_power_bases(
     just before its first use, so ``(a + b)**3`` evaluates ``a + b`` once."""
     named: dict[sp.Expr, sp.Symbol] = {}
     pending: list[tuple[sp.Symbol, sp.Expr]] = []
+    seen: dict[sp.Expr, sp.Expr] = {}  # subtree -> its rewrite (named bases stay named)
 
     def visit(e: sp.Expr) -> sp.Expr:
         if e.is_Atom:
             return e
+        hit = seen.get(e)
+        if hit is None:
+            hit = seen[e] = rewrite(e)
+        return hit
+
+    def rewrite(e: sp.Expr) -> sp.Expr:
         args = tuple(visit(a) for a in e.args)
         if args != e.args:
             e = e.func(*args)

@@ -49,7 +49,7 @@ from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.opcount import count_ops
 from symmech.algebra.stability import stable_entry
-from symmech.algebra.walk import atoms
+from symmech.algebra.walk import atoms, free_symbols
 from symmech.codegen.blocks import (
     BATCH_SUFFIX,
     Block,
@@ -477,6 +477,8 @@ def _build(
     velocity_set = set(v)
 
     prepared: dict[sp.Expr, sp.Expr] = {}
+    walked: dict = {}  # free symbols of the subtrees walked (algebra.walk.free_symbols)
+    counted: dict = {}  # operations of the subtrees counted (algebra.opcount.count_ops)
 
     def prepare(e: sp.Expr) -> sp.Expr:
         """Inputs and constants substituted; a velocity-free entry (metric, gradients,
@@ -490,8 +492,8 @@ def _build(
         out = out.xreplace(exact) if exact else out
         if (
             not out.is_number
-            and not (out.free_symbols & velocity_set)
-            and count_ops(out) <= limits.STABLE_ENTRY_OPS
+            and not (free_symbols(out, walked) & velocity_set)
+            and count_ops(out, counted) <= limits.STABLE_ENTRY_OPS
         ):
             out = stable_entry(out, state)
         prepared[e] = out
@@ -523,7 +525,7 @@ def _build(
         wall_index: int | None = None,
     ) -> None:
         blocks = [prepare_block(b) for b in blocks]
-        syms: set = set().union(*[e.free_symbols for b in blocks for e in b.entries])
+        syms: set = set().union(*[free_symbols(e, walked) for b in blocks for e in b.entries])
         slot_syms = set(inputs.slots.values())
         uses_t, uses_u, uses_p = TIME in syms, bool(syms & slot_syms), bool(syms & set(runtime))
         if calls is not None or part_of is not None:
