@@ -82,6 +82,7 @@ class Memo:
 
     def __init__(self) -> None:
         self._printable: dict[sp.Expr, sp.Expr] = {}
+        self._folded: dict[sp.Expr, sp.Expr] = {}  # fold_numbers's, shared by the entries
         self._eliminated: dict[tuple[sp.Expr, ...], _Elimination] = {}
         self._texts: dict[tuple[object, int], tuple[Names, dict[sp.Expr, str]]] = {}
 
@@ -106,7 +107,7 @@ class Memo:
             r = safe_rewrite(e)
             if r.has(sp.zoo, sp.nan, sp.oo, -sp.oo):
                 raise NotFinite(r)
-            hit = self._printable[e] = fold_numbers(r)
+            hit = self._printable[e] = fold_numbers(r, self._folded)
         return hit
 
     def eliminated(self, entries: tuple[sp.Expr, ...]) -> _Elimination:

@@ -139,7 +139,7 @@ def _normal_exponent(k: sp.Expr) -> sp.Expr:
     return k
 
 
-def fold_numbers(expr: sp.Expr) -> sp.Expr:
+def fold_numbers(expr: sp.Expr, memo: dict[sp.Expr, sp.Expr] | None = None) -> sp.Expr:
     """Fold every symbol-free subexpression into one correctly rounded literal.
 
     ``sqrt(2)*x -> 1.4142135623730951*x``, ``3*sqrt(2)*x + 1 + pi -> 4.242...*x +
@@ -149,13 +149,14 @@ def fold_numbers(expr: sp.Expr) -> sp.Expr:
     exponent with an integral or half-integral value becomes that rational (``x**2.0 ->
     x**2``, ``x**1.0 -> x``).  The value is the real number rounded once
     (:func:`correctly_rounded`), so its error, at most ``u/2`` relative, is no larger than
-    the first-order rounding error of evaluating the subexpression in float64.
+    the first-order rounding error of evaluating the subexpression in float64.  ``memo``
+    (subtree -> folded) may be kept by the caller for expressions sharing subtrees.
     """
 
     def numeric(e: sp.Expr) -> bool:
         return bool(e.is_number) and not e.is_Rational and not isinstance(e, sp.Float)
 
-    memo: dict[sp.Expr, sp.Expr] = {}
+    memo = {} if memo is None else memo
 
     def go(e: sp.Expr) -> sp.Expr:
         if e.is_Atom:
