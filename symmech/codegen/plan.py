@@ -43,13 +43,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import sympy as sp
-from sympy.core.function import AppliedUndef
 
 from symmech.algebra import budget as limits
 from symmech.algebra.budget import BudgetExceeded
 from symmech.algebra.opcount import count_ops
 from symmech.algebra.stability import stable_entry
-from symmech.algebra.walk import atoms, free_symbols
+from symmech.algebra.walk import free_symbols
 from symmech.codegen.blocks import (
     BATCH_SUFFIX,
     Block,
@@ -58,11 +57,10 @@ from symmech.codegen.blocks import (
     wall_ids,
 )
 from symmech.codegen.closed_form_budget import closed_form_cost
+from symmech.codegen.definitions import InputSlots, definition_rules
 from symmech.codegen.kinds import SCENE_BUILDERS, WALL_BUILDERS, BuildContext
 from symmech.declaration.admissible import expression_problems
-from symmech.declaration.expressions import to_expression
 from symmech.declaration.symbols import t as TIME
-from symmech.errors import SymmechError
 
 if TYPE_CHECKING:
     from symmech.scene import Scene
@@ -202,113 +200,6 @@ def check_unique_names(functions: Sequence[FunctionPlan]) -> None:
                 seen[name] = what
     if clashes:
         raise CodegenError("generated function names collide: " + "; ".join(clashes))
-
-
-class _Inputs:
-    """Arbitrary functions of time f(t) and their derivatives -> input slots u[k]."""
-
-    def __init__(self, definitions: Mapping):
-        self.definitions = dict(definitions)
-        self.slots: dict[sp.Expr, sp.Symbol] = {}
-
-    def _key(self, atom: sp.Expr) -> tuple[str, int]:
-        if isinstance(atom, sp.Derivative):
-            return (atom.expr.func.__name__, atom.derivative_count)
-        return (atom.func.__name__, 0)
-
-    def substitute(self, e: sp.Expr) -> sp.Expr:
-        e = defined(sp.sympify(e, strict=True), self.definitions)
-        found = atoms(e, (sp.Derivative, AppliedUndef))  # one walk over distinct subtrees
-        if not found:
-            return e
-        derivatives = [a for a in found if isinstance(a, sp.Derivative)]
-        inputs = [a for a in derivatives if isinstance(a.expr, AppliedUndef)]
-        inputs += [a for a in found if isinstance(a, AppliedUndef)]
-        rule = {}
-        for a in inputs:
-            f = a.expr if isinstance(a, sp.Derivative) else a
-            if f.args != (TIME,):
-                raise CodegenError(
-                    f"{a}: only functions of t alone can become run-time inputs; define it"
-                    " with definitions={...}"
-                )
-            if a not in self.slots:
-                name, order = self._key(a)
-                self.slots[a] = sp.Dummy(f"{name}{'_' + 'd' * order if order else ''}", real=True)
-            rule[a] = self.slots[a]
-        e = e.xreplace(rule) if rule else e
-        leftover = sorted(map(str, atoms(e, (sp.Derivative,)))) if derivatives else []
-        if leftover:
-            raise CodegenError(f"unevaluated derivatives {leftover} cannot be generated")
-        return e
-
-    def ordered(self) -> tuple[tuple[sp.Symbol, sp.Expr], ...]:
-        items = sorted(self.slots.items(), key=lambda kv: self._key(kv[0]))
-        return tuple((d, a) for a, d in items)
-
-
-def definition_rules(scene: Scene, definitions: Mapping) -> dict[sp.Expr, sp.Expr]:
-    """``definitions`` as ``{f(t): expression}``.  A key is ``f``, ``f(t)`` or the name
-    ``"f"`` of a function of t in the scene (matched by name); a value is a sympy
-    expression, a number, or text parsed safely
-    (:func:`symmech.declaration.expressions.to_expression`, never evaluated) in ``t`` and
-    the scene's parameters."""
-    if not isinstance(definitions, Mapping):
-        raise CodegenError(
-            "definitions: expected a mapping {function of t: expression in t and the"
-            f" parameters}}, got {type(definitions).__name__}"
-        )
-    if not definitions:
-        return {}
-    names = {"t": TIME, **{str(p): p for p in scene.parameters}}
-    present = {
-        a
-        for e in scene.declaration.expressions()
-        for a in atoms(e, (AppliedUndef,))
-        if a.args == (TIME,)
-    }
-    out: dict[sp.Expr, sp.Expr] = {}
-    for key, value in definitions.items():
-        if isinstance(key, str) and key.isidentifier():
-            name = key
-        elif isinstance(key, sp.FunctionClass):
-            name = key.__name__
-        elif isinstance(key, AppliedUndef) and key.args == (TIME,):
-            name = key.func.__name__
-        else:
-            raise CodegenError(f"definitions: {key!r} is not an arbitrary function of t")
-        # by name: the scene's f(t) whatever its assumptions (a scene file's is real)
-        fs = [a for a in present if a.func.__name__ == name]
-        if not fs:
-            known = sorted({a.func.__name__ for a in present})
-            raise CodegenError(
-                f"definitions[{name!r}]: scene {scene.name!r} has no function {name}(t)"
-                f" (its functions of t: {known})"
-            )
-        try:
-            e = to_expression(value, names, field=f"definitions[{name!r}]")
-        except SymmechError as exc:
-            raise CodegenError(str(exc)) from None
-        # what a scene's own fields may hold (declaration.admissible: elementary functions,
-        # real, finite), and a function of t and the parameters only, whatever its type
-        problems = expression_problems(e)
-        if problems:
-            raise CodegenError(f"definitions[{name!r}] = {e}: {'; '.join(problems)}")
-        stray = sorted(str(x) for x in e.free_symbols if x not in set(names.values()))
-        stray += sorted({str(a) for a in atoms(e, (AppliedUndef,))})
-        if stray:
-            raise CodegenError(
-                f"definitions[{name!r}] = {e}: a definition is a function of t and the"
-                f" parameters {sorted(str(p) for p in scene.parameters)} only; it uses {stray}"
-            )
-        out.update(dict.fromkeys(fs, e))
-    return out
-
-
-def defined(e: Any, rules: Mapping[sp.Expr, sp.Expr]) -> Any:
-    """``e`` (an expression or a matrix) with the functions of t of
-    :func:`definition_rules` replaced by their expressions, their derivatives evaluated."""
-    return e.subs(rules).doit() if rules else e
 
 
 def _check_constants(scene: Scene, constants: Mapping) -> dict[sp.Symbol, sp.Expr]:
@@ -452,6 +343,107 @@ def build_plan(
     return _build(scene, "linear_solve", *options, fallback=note)
 
 
+class _FunctionPlans:
+    """The plans of a scene's functions as the builders add them (:meth:`add`, the
+    ``add`` of :class:`~symmech.codegen.kinds.BuildContext`): every entry prepared once
+    (:meth:`prepare`), the symbols each reads checked and recorded."""
+
+    def __init__(
+        self, scene: Scene, baked: Mapping, runtime: tuple[sp.Symbol, ...], inputs: InputSlots
+    ) -> None:
+        # a float constant is a double: substitute its exact (dyadic) value, so that x**k
+        # with k = 2.0 is x**2 and the folding of constants rounds once, at printing
+        self.exact = {
+            s: sp.Rational(val) if isinstance(val, sp.Float) else val for s, val in baked.items()
+        }
+        self.runtime, self.inputs = runtime, inputs
+        self.state = (*scene.coordinates, TIME)
+        self.velocities = set(scene.velocities)
+        self.fixed = set(scene.coordinates) | self.velocities | set(runtime) | {TIME}
+        self.plans: list[FunctionPlan] = []
+        self._prepared: dict[sp.Expr, sp.Expr] = {}
+        self._walked: dict = {}  # free symbols of the subtrees walked (algebra.walk)
+        self._counted: dict = {}  # operations of the subtrees counted (algebra.opcount)
+        self._ready: dict[int, tuple[Block, Block]] = {}
+
+    def prepare(self, e: sp.Expr) -> sp.Expr:
+        """Inputs and constants substituted; a velocity-free entry (metric, gradients,
+        one-forms, projectors) in stable form: numerator and denominator factored, so a
+        difference such as a^2 - b^2 is evaluated as (a - b)(a + b), without cancellation
+        (see :mod:`symmech.algebra.stability`).  Velocity-dependent entries keep their
+        structure (the sparse forcing, the stable impact maps)."""
+        hit = self._prepared.get(e)  # the metric's entries recur: symmetry, every solve
+        if hit is not None:
+            return hit
+        out = self.inputs.substitute(e)
+        out = out.xreplace(self.exact) if self.exact else out
+        if (
+            not out.is_number
+            and not (free_symbols(out, self._walked) & self.velocities)
+            and count_ops(out, self._counted) <= limits.STABLE_ENTRY_OPS
+        ):
+            out = stable_entry(out, self.state)
+        self._prepared[e] = out
+        return out
+
+    def prepare_block(self, b: Block) -> Block:
+        """``b`` with every entry prepared; a block shared by several functions (the
+        metric of every solve) is prepared once."""
+        hit = self._ready.get(id(b))
+        if hit is None or hit[0] is not b:
+            entries = tuple(self.prepare(e) for e in b.entries)
+            hit = self._ready[id(b)] = (b, Block(b.name, b.shape, entries))
+        return hit[1]
+
+    def add(
+        self,
+        name: str,
+        kind: str,
+        doc: str,
+        equation: str,
+        state: tuple[str, ...],
+        blocks: list[Block],
+        out_shape: tuple[int, ...],
+        **options: Any,
+    ) -> None:
+        """Append the plan of a function (the fields of :class:`FunctionPlan`; ``options``
+        its optional ones), its blocks prepared; what it reads (t, inputs, parameters)
+        from its entries and from the function it calls or is part of.  An entry holding
+        a symbol that is neither state nor parameter is a :class:`CodegenError`."""
+        prepared = [self.prepare_block(b) for b in blocks]
+        syms: set = set().union(
+            *[free_symbols(e, self._walked) for b in prepared for e in b.entries]
+        )
+        slots = set(self.inputs.slots.values())  # (made as the entries are prepared)
+        stray = sorted(str(s) for s in syms - self.fixed - slots)
+        if stray:
+            raise CodegenError(f"{name}: symbols {stray} are neither state nor parameters")
+        uses_t = TIME in syms
+        uses_u = bool(syms & slots)
+        uses_p = bool(syms & set(self.runtime))
+        called = options.get("calls") or (options.get("part_of") or (None,))[0]
+        if called is not None:
+            callee = next(f for f in self.plans if f.name == called)
+            uses_t |= callee.uses_time
+            uses_u |= callee.uses_inputs
+            uses_p |= callee.uses_parameters
+        self.plans.append(
+            FunctionPlan(
+                name=name,
+                kind=kind,
+                doc=doc,
+                equation=equation,
+                state=state,
+                blocks=tuple(prepared),
+                out_shape=out_shape,
+                uses_time=uses_t,
+                uses_inputs=uses_u,
+                uses_parameters=uses_p,
+                **options,
+            )
+        )
+
+
 def _build(
     scene: Scene,
     strategy: str,
@@ -464,106 +456,18 @@ def _build(
     """The plan with a concrete strategy (``closed_form`` or ``linear_solve``)."""
     n, m = scene.n, scene.constraint_matrix.rows
     baked = _check_constants(scene, constants)
-    # a float constant is a double: substitute its exact (dyadic) value, so that x**k
-    # with k = 2.0 is x**2 and the folding of constants rounds once, at printing
-    exact = {s: sp.Rational(val) if isinstance(val, sp.Float) else val for s, val in baked.items()}
     runtime = tuple(p for p in scene.parameters if p not in baked)
-    inputs = _Inputs(definition_rules(scene, definitions))
+    inputs = InputSlots(definition_rules(scene, definitions))
     q, v = scene.coordinates, scene.velocities
     omitted: list[str] = [fallback] if fallback else []
-    plans: list[FunctionPlan] = []
-
-    state = (*q, TIME)
-    velocity_set = set(v)
-
-    prepared: dict[sp.Expr, sp.Expr] = {}
-    walked: dict = {}  # free symbols of the subtrees walked (algebra.walk.free_symbols)
-    counted: dict = {}  # operations of the subtrees counted (algebra.opcount.count_ops)
-
-    def prepare(e: sp.Expr) -> sp.Expr:
-        """Inputs and constants substituted; a velocity-free entry (metric, gradients,
-        one-forms, projectors) in stable form: numerator and denominator factored, so a
-        difference such as a^2 - b^2 is evaluated as (a - b)(a + b), without cancellation
-        (see :mod:`symmech.algebra.stability`).  Velocity-dependent entries keep their
-        structure (the sparse forcing, the stable impact maps)."""
-        if e in prepared:  # the metric's entries recur: symmetry, and in every solve
-            return prepared[e]
-        out = inputs.substitute(e)
-        out = out.xreplace(exact) if exact else out
-        if (
-            not out.is_number
-            and not (free_symbols(out, walked) & velocity_set)
-            and count_ops(out, counted) <= limits.STABLE_ENTRY_OPS
-        ):
-            out = stable_entry(out, state)
-        prepared[e] = out
-        return out
-
-    ready: dict[int, tuple[Block, Block]] = {}
-
-    def prepare_block(b: Block) -> Block:
-        """``b`` with every entry prepared; a block shared by several functions (the
-        metric of every solve) is prepared once."""
-        hit = ready.get(id(b))
-        if hit is None or hit[0] is not b:
-            hit = ready[id(b)] = (b, Block(b.name, b.shape, tuple(prepare(e) for e in b.entries)))
-        return hit[1]
-
-    def add(
-        name: str,
-        kind: str,
-        doc: str,
-        equation: str,
-        state: tuple[str, ...],
-        blocks: list[Block],
-        out_shape: tuple[int, ...],
-        step: str | None = None,
-        step_args: tuple[int, ...] = (),
-        calls: str | None = None,
-        part_of: tuple[str, int] | None = None,
-        wall: str | None = None,
-        wall_index: int | None = None,
-    ) -> None:
-        blocks = [prepare_block(b) for b in blocks]
-        syms: set = set().union(*[free_symbols(e, walked) for b in blocks for e in b.entries])
-        slot_syms = set(inputs.slots.values())
-        uses_t, uses_u, uses_p = TIME in syms, bool(syms & slot_syms), bool(syms & set(runtime))
-        if calls is not None or part_of is not None:
-            callee = next(f for f in plans if f.name in (calls, part_of and part_of[0]))
-            uses_t |= callee.uses_time
-            uses_u |= callee.uses_inputs
-            uses_p |= callee.uses_parameters
-        allowed = set(q) | set(v) | set(runtime) | slot_syms | {TIME}
-        stray = sorted(str(s) for s in syms - allowed)
-        if stray:
-            raise CodegenError(f"{name}: symbols {stray} are neither state nor parameters")
-        plans.append(
-            FunctionPlan(
-                name=name,
-                kind=kind,
-                doc=doc,
-                equation=equation,
-                state=state,
-                blocks=tuple(blocks),
-                out_shape=out_shape,
-                step=step,
-                step_args=step_args,
-                calls=calls,
-                part_of=part_of,
-                wall=wall,
-                wall_index=wall_index,
-                uses_time=uses_t,
-                uses_inputs=uses_u,
-                uses_parameters=uses_p,
-            )
-        )
-
+    adder = _FunctionPlans(scene, baked, runtime, inputs)
+    plans = adder.plans
     ctx = BuildContext(
         scene=scene,
         wanted=wanted,
         closed=strategy == "closed_form",
         omitted=omitted,
-        add=add,
+        add=adder.add,
         extra=extra,
     )
     for builder in SCENE_BUILDERS:

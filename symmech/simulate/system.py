@@ -39,8 +39,8 @@ from typing import Any
 import sympy as sp
 
 from symmech.codegen import generate
+from symmech.codegen.definitions import defined, definition_rules
 from symmech.codegen.module import SceneModule
-from symmech.codegen.plan import defined, definition_rules
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
