@@ -1,7 +1,7 @@
 """The CPython extension of a C target: the entry points of its functions of the state and
 the parameters for one state (template ``c/python_module.c.jinja``), compiled with the
 library's sources into one shared object, imported by
-:func:`symmech.codegen.module.load_generated`, which also loads that object through
+:func:`symmech.codegen.loading.load_generated`, which also loads that object through
 ctypes for the general path (so the generated code is compiled once, not twice)."""
 
 from __future__ import annotations

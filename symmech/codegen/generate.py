@@ -107,9 +107,9 @@ class GeneratedCode:
         :func:`symmech.codegen.build.cache_dir`), and for C ``compiler`` and ``flags``
         (see :func:`symmech.codegen.build.compile_library`), and ``extension=False`` to make
         one-state C calls through ctypes instead of the CPython extension built next to the
-        library (see :func:`symmech.codegen.module.load_generated`).
+        library (see :func:`symmech.codegen.loading.load_generated`).
         """
-        from symmech.codegen.module import load_generated
+        from symmech.codegen.loading import load_generated
 
         return load_generated(
             self, compiler=compiler, flags=flags, cache=cache, extension=extension
