@@ -151,3 +151,24 @@ def test_dynamics_of_a_scene_without_constraints_is_a_note():
     code = codegen.generate(bouncing_ball(), "numpy", functions=["dynamics", "rhs"])
     assert "dynamics" not in [f.name for f in code.functions]
     assert any(note.startswith("dynamics, multipliers") for note in code.omitted)
+
+
+def test_asked_for_dynamics_is_the_whole_of_the_parts(tmp_path):
+    """dynamics asked for by name, with acceleration and multipliers large: they become
+    its parts, and it is emitted once."""
+    scene = sleigh()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sharing, "MAX_SPLIT_CHARACTERS", 0)
+        code = codegen.generate(
+            scene, "c", strategy="linear_solve", functions=["dynamics", *FUNCTIONS]
+        )
+    names = [f.name for f in code.functions]
+    assert names.count("dynamics") == 1
+    assert [f.part_of for f in code.functions if f.part_of] == [("dynamics", 0), ("dynamics", 3)]
+    mod = code.load(cache=tmp_path)
+    q, v = _states(3)
+    both = mod.dynamics(q, v, PARAMS)
+    assert np.array_equal(
+        both,
+        np.concatenate([mod.acceleration(q, v, PARAMS), mod.multipliers(q, v, PARAMS)], axis=1),
+    )
