@@ -229,9 +229,24 @@ def _dump(
 ) -> str:
     """The text of :func:`dump_scene`, its cost not yet checked."""
     decl = scene.declaration
+    lines = _header_lines(decl, description)
+    params = _parameters(decl)
+    applied = _applied_functions(decl)
+    table = _symbol_table(decl, params, applied)
+    lines += _field_lines(decl, table)
+    lines += _parameter_lines(params, defaults)
+    lines += _function_lines(applied, dict(functions or {}), table)
+    lines += _frame_lines(decl, table)
+    for k, w in enumerate(decl.walls):
+        lines += _wall_lines(w, f"walls[{k}]", decl.velocities, table)
+    if decl.drawing is not None:
+        lines.extend(_drawing_toml(decl.drawing, table))
+    return "\n".join(lines) + "\n"
+
+
+def _header_lines(decl: Any, description: str) -> list[str]:
+    """The format, the name, the description and the coordinates (checked identifiers)."""
     q, v = decl.coordinates, decl.velocities
-    defaults = dict(defaults or {})
-    by_name = {(k if isinstance(k, str) else k.name): val for k, val in defaults.items()}
     lines = [f"# symmech scene file (format {FORMAT_VERSION}); load with symmech.load_scene"]
     lines.append(f"format = {FORMAT_VERSION}")
     if not _IDENTIFIER.match(decl.name):
@@ -245,28 +260,47 @@ def _dump(
                 [f"coordinates: {s.name!r} must be a real symbol named by an identifier"]
             )
     lines.append("coordinates = [" + ", ".join(_toml_string(s.name) for s in q) + "]")
+    return lines
 
-    # the symbol table for the read-back check
-    table: dict[str, sp.Expr] = {"t": TIME}
-    table.update({s.name: s for s in q})
-    table.update({velocity_of(s).name: velocity_of(s) for s in q})
-    table.update({s.name: s for s in v})
-    # a symbolic restitution is a parameter too (the Scene may not list it)
+
+def _parameters(decl: Any) -> list[sp.Symbol]:
+    """The scene's parameters, and a symbolic restitution (the Scene may not list it)."""
     params = list(decl.parameters)
     for w in decl.walls:
         if isinstance(w.restitution, sp.Symbol) and w.restitution not in params:
             params.append(w.restitution)
-    table.update({p.name: p for p in params})
+    return params
+
+
+def _applied_functions(decl: Any) -> dict[str, sp.Expr]:
+    """The arbitrary functions the scene's expressions apply, by name (each checked)."""
     applied: dict[str, sp.Expr] = {}
-    arguments = (TIME, *q)
+    arguments = (TIME, *decl.coordinates)
     for e in decl.expressions():
         for f in sorted(sp.sympify(e, strict=True).atoms(AppliedUndef), key=sp.default_sort_key):
             _check_function(f, arguments, applied)
             applied[f.func.__name__] = f
-    table.update(applied)
-    fn_defs = dict(functions or {})
+    return applied
 
-    lines.append("metric = " + _matrix_toml(decl.metric, "metric", table))
+
+def _symbol_table(
+    decl: Any, params: list[sp.Symbol], applied: Mapping[str, sp.Expr]
+) -> dict[str, sp.Expr]:
+    """The symbol table of the read-back check: t, the coordinates and their velocities,
+    the quasi-velocities, the parameters and the applied functions."""
+    q = decl.coordinates
+    table: dict[str, sp.Expr] = {"t": TIME}
+    table.update({s.name: s for s in q})
+    table.update({velocity_of(s).name: velocity_of(s) for s in q})
+    table.update({s.name: s for s in decl.velocities})
+    table.update({p.name: p for p in params})
+    table.update(applied)
+    return table
+
+
+def _field_lines(decl: Any, table: Mapping[str, sp.Expr]) -> list[str]:
+    """The metric, the potential, the forces and the constraints."""
+    lines = ["metric = " + _matrix_toml(decl.metric, "metric", table)]
     if decl.potential != 0:
         lines.append("potential = " + _toml_value(decl.potential, "potential", table))
     if any(e != 0 for e in decl.forces):
@@ -275,17 +309,25 @@ def _dump(
     if decl.m:
         cons = [
             _toml_value(
-                _row_expression(decl.constraint_matrix.row(a), v), f"constraints[{a}]", table
+                _row_expression(decl.constraint_matrix.row(a), decl.velocities),
+                f"constraints[{a}]",
+                table,
             )
             for a in range(decl.m)
         ]
         lines.append("constraints = [" + ", ".join(cons) + "]")
+    return lines
 
+
+def _parameter_lines(
+    params: list[sp.Symbol], defaults: Mapping[sp.Symbol | str, object] | None
+) -> list[str]:
+    """The ``[parameters]`` table: each parameter's default value and sign."""
+    by_name = {(k if isinstance(k, str) else k.name): val for k, val in (defaults or {}).items()}
     unknown = sorted(set(by_name) - {p.name for p in params})
     if unknown:
         raise SceneFileError([f"defaults: {unknown} are not parameters of the scene"])
-    lines.append("")
-    lines.append("[parameters]")
+    lines = ["", "[parameters]"]
     for p in params:
         sign = _sign_of(p)
         if sign is None:
@@ -306,68 +348,78 @@ def _dump(
         if sign != "positive":
             parts.append(f"sign = {_toml_string(sign)}")
         lines.append(f"{p.name} = {{ {', '.join(parts)} }}" if parts else f"{p.name} = {{}}")
+    return lines
 
-    if applied or fn_defs:
-        lines.append("")
-        lines.append("[functions]")
-        for nm, f in applied.items():
-            parts = []
-            if f.args != (TIME,):
-                parts.append("arguments = [" + ", ".join(f'"{a.name}"' for a in f.args) + "]")
-            if f.func != sp.Function(nm, real=True):
-                parts.append("real = false")
-            lines.append(f"{nm} = {{ {', '.join(parts)} }}" if parts else f"{nm} = {{}}")
-        for nm, expr in fn_defs.items():
-            lines.append(f"{nm} = {_toml_value(expr, f'functions.{nm}', table)}")
 
-    if decl.frame is not None:
-        lines.append("")
-        lines.append("[frame]")
-        lines.append("quasi_velocities = [" + ", ".join(_toml_string(s.name) for s in v) + "]")
-        rows = [
-            "  ["
-            + ", ".join(
-                _toml_value(decl.frame[i, j], f"frame.matrix[{i},{j}]", table)
-                for j in range(decl.n)
+def _function_lines(
+    applied: Mapping[str, sp.Expr], fn_defs: Mapping[str, sp.Expr], table: Mapping[str, sp.Expr]
+) -> list[str]:
+    """The ``[functions]`` table: the applied functions' arguments and reality, and the
+    functions defined by expressions; nothing when there are none."""
+    if not applied and not fn_defs:
+        return []
+    lines = ["", "[functions]"]
+    for nm, f in applied.items():
+        parts = []
+        if f.args != (TIME,):
+            parts.append("arguments = [" + ", ".join(f'"{a.name}"' for a in f.args) + "]")
+        if f.func != sp.Function(nm, real=True):
+            parts.append("real = false")
+        lines.append(f"{nm} = {{ {', '.join(parts)} }}" if parts else f"{nm} = {{}}")
+    for nm, expr in fn_defs.items():
+        lines.append(f"{nm} = {_toml_value(expr, f'functions.{nm}', table)}")
+    return lines
+
+
+def _frame_lines(decl: Any, table: Mapping[str, sp.Expr]) -> list[str]:
+    """The ``[frame]`` table of quasi-velocities; nothing without a frame."""
+    if decl.frame is None:
+        return []
+    lines = ["", "[frame]"]
+    lines.append(
+        "quasi_velocities = [" + ", ".join(_toml_string(s.name) for s in decl.velocities) + "]"
+    )
+    rows = [
+        "  ["
+        + ", ".join(
+            _toml_value(decl.frame[i, j], f"frame.matrix[{i},{j}]", table) for j in range(decl.n)
+        )
+        + "],"
+        for i in range(decl.n)
+    ]
+    lines.append("matrix = [\n" + "\n".join(rows) + "\n]")
+    return lines
+
+
+def _wall_lines(
+    w: Any, label: str, v: Sequence[sp.Symbol], table: Mapping[str, sp.Expr]
+) -> list[str]:
+    """One ``[[walls]]`` table: name, gap, restitution, impulsive constraints, law and
+    velocity, each written only when it is not the default."""
+    lines = ["", "[[walls]]"]
+    if w.wall.name:
+        if not _IDENTIFIER.match(w.wall.name):
+            raise SceneFileError([f"{label}.name: {w.wall.name!r} is not an identifier"])
+        lines.append(f"name = {_toml_string(w.wall.name)}")
+    lines.append(f"psi = {_toml_value(w.psi, f'{label}.psi', table)}")
+    if w.restitution != 1:
+        lines.append(f"restitution = {_toml_value(w.restitution, f'{label}.restitution', table)}")
+    if w.impulsive_matrix.rows:
+        nus = [
+            _toml_value(
+                _row_expression(w.impulsive_matrix.row(A), v),
+                f"{label}.impulsive_constraints[{A}]",
+                table,
             )
-            + "],"
-            for i in range(decl.n)
+            for A in range(w.impulsive_matrix.rows)
         ]
-        lines.append("matrix = [\n" + "\n".join(rows) + "\n]")
-
-    for k, w in enumerate(decl.walls):
-        label = f"walls[{k}]"
-        lines.append("")
-        lines.append("[[walls]]")
-        if w.wall.name:
-            if not _IDENTIFIER.match(w.wall.name):
-                raise SceneFileError([f"{label}.name: {w.wall.name!r} is not an identifier"])
-            lines.append(f"name = {_toml_string(w.wall.name)}")
-        lines.append(f"psi = {_toml_value(w.psi, f'{label}.psi', table)}")
-        if w.restitution != 1:
-            lines.append(
-                f"restitution = {_toml_value(w.restitution, f'{label}.restitution', table)}"
-            )
-        if w.impulsive_matrix.rows:
-            nus = [
-                _toml_value(
-                    _row_expression(w.impulsive_matrix.row(A), v),
-                    f"{label}.impulsive_constraints[{A}]",
-                    table,
-                )
-                for A in range(w.impulsive_matrix.rows)
-            ]
-            lines.append("impulsive_constraints = [" + ", ".join(nus) + "]")
-        if w.law != "newton":
-            lines.append(f"law = {_toml_string(w.law)}")
-        if w.velocity is not None:
-            comps = [
-                _toml_value(c, f"{label}.velocity[{j}]", table) for j, c in enumerate(w.velocity)
-            ]
-            lines.append("velocity = [" + ", ".join(comps) + "]")
-    if decl.drawing is not None:
-        lines.extend(_drawing_toml(decl.drawing, table))
-    return "\n".join(lines) + "\n"
+        lines.append("impulsive_constraints = [" + ", ".join(nus) + "]")
+    if w.law != "newton":
+        lines.append(f"law = {_toml_string(w.law)}")
+    if w.velocity is not None:
+        comps = [_toml_value(c, f"{label}.velocity[{j}]", table) for j, c in enumerate(w.velocity)]
+        lines.append("velocity = [" + ", ".join(comps) + "]")
+    return lines
 
 
 def _drawing_toml(drawing: Drawing, table: Mapping[str, sp.Expr]) -> list[str]:
