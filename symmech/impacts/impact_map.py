@@ -435,34 +435,11 @@ def derive_impact_map(
     if law not in LAWS:
         raise ImpactError(f"wall {rw.name!r}: law must be one of {LAWS}, got {law!r}")
     level: Level = "none" if simplify == "none" else "light"
-    q = declaration.coordinates
-    n = declaration.n
-    v = declaration.velocities
+    q, n, v = declaration.coordinates, declaration.n, declaration.velocities
     points = sample_points([*q, *declaration.parameters, TIME])
     psi, alpha, dpsi, psi_t = wall_one_form(declaration, rw, points)
-    g = sp.Matrix(declaration.metric)
-    mu = sp.Matrix(declaration.constraint_matrix)
-    nu = sp.Matrix(rw.impulsive_matrix)
-
-    on_wall = points_on_wall(psi, q, _with_undefined(points, psi))
-
-    def check(C: sp.Matrix, PY: sp.Matrix) -> None:
-        check_regular(
-            C,
-            points,
-            wall=rw.name,
-            psi=psi,
-            mu=mu,
-            nu=nu,
-            velocities=v,
-            g=g,
-            dpsi=dpsi,
-            wall_points=on_wall,
-        )
-
     permanent = projectors if level != "none" else None
-    proj = impact_projectors(g, mu, dpsi, nu, level, check=check, permanent=permanent)
-
+    proj = _checked_projectors(declaration, rw, psi, dpsi, points, level, permanent)
     V: sp.Matrix | None = None
     if wall_velocity is None and rw.velocity is not None:
         wall_velocity = rw.velocity  # declared with the wall (checked by the declaration)
@@ -473,19 +450,10 @@ def derive_impact_map(
         from symmech.impacts.newton import wall_velocity as default_velocity
 
         V = default_velocity(proj, psi_t, level)
-
     state = (*q, TIME)
-
-    def finish(e: sp.Expr) -> sp.Expr:
-        if simplify == "full" and limits.affordable(e, limits.IMPACT_FULL_OPS):
-            e = sp.simplify(e)
-        return stable_coefficient(e, state)
-
     if simplify != "none":
-        matrix = sp.Matrix(n, n, [finish(e) for e in matrix])
-        offset = sp.Matrix(n, 1, [finish(e) for e in offset])
-        W = stable_matrix(W, state)
-        V = stable_matrix(V, state)
+        matrix, offset = _finished(matrix, simplify, state), _finished(offset, simplify, state)
+        W, V = stable_matrix(W, state), stable_matrix(V, state)
     energy: EnergyLaw | None = None
     if law == "newton":
         # entries are already in stable form: keep each velocity coefficient separate
@@ -495,29 +463,9 @@ def derive_impact_map(
     else:
         energy = energy_law(proj, alpha, v, W, level, stable=simplify != "none", state=state)
         post = sp.Matrix(energy.post_velocity)
-
-    if law == "newton":
-        closed, scan = [*matrix, *offset], []
-    else:
-        assert energy is not None
-        closed = [*energy.tangential, *energy.direction, *W]
-        scan = [w for w, _ in energy.squares]
-    singularities = impact_singularities(
-        proj,
-        psi_t,
-        default_velocity=wall_velocity is None,
-        extra=list(V) if wall_velocity is not None else [],
-        closed_form=closed,
-        also_scan=scan,
+    singularities = _singularities(
+        proj, psi_t, matrix, offset, W, V if wall_velocity is not None else None, energy
     )
-    if energy is not None:
-        singularities.append(
-            Singularity(
-                energy.speed_squared,
-                "branch point of the square root in the energy law (grazing impact: no"
-                " normal relative velocity); v+ is continuous but not differentiable there",
-            )
-        )
     return ImpactMap(
         declaration=declaration,
         wall=rw,
@@ -534,3 +482,83 @@ def derive_impact_map(
         singularities=singularities,
         simplify=simplify,
     )
+
+
+def _checked_projectors(
+    declaration: Declaration,
+    rw: ResolvedWall,
+    psi: sp.Expr,
+    dpsi: sp.Matrix,
+    points: list[dict],
+    level: Level,
+    permanent: tuple[sp.MatrixBase, sp.MatrixBase] | None,
+) -> ImpactProjectors:
+    """The projectors of the impact (:func:`impact_projectors`), each Gram matrix checked
+    regular at the sampled points and on the wall (:func:`check_regular`)."""
+    g = sp.Matrix(declaration.metric)
+    mu = sp.Matrix(declaration.constraint_matrix)
+    nu = sp.Matrix(rw.impulsive_matrix)
+    on_wall = points_on_wall(psi, declaration.coordinates, _with_undefined(points, psi))
+
+    def check(C: sp.Matrix, PY: sp.Matrix) -> None:
+        check_regular(
+            C,
+            points,
+            wall=rw.name,
+            psi=psi,
+            mu=mu,
+            nu=nu,
+            velocities=declaration.velocities,
+            g=g,
+            dpsi=dpsi,
+            wall_points=on_wall,
+        )
+
+    return impact_projectors(g, mu, dpsi, nu, level, check=check, permanent=permanent)
+
+
+def _finished(M: sp.Matrix, simplify: str, state: tuple[sp.Symbol, ...]) -> sp.Matrix:
+    """Each entry of ``M`` in stable form (:func:`stable_coefficient`), after
+    :func:`sympy.simplify` for ``simplify="full"`` (within its budget)."""
+
+    def finish(e: sp.Expr) -> sp.Expr:
+        if simplify == "full" and limits.affordable(e, limits.IMPACT_FULL_OPS):
+            e = sp.simplify(e)
+        return stable_coefficient(e, state)
+
+    return sp.Matrix(M.rows, M.cols, [finish(e) for e in M])
+
+
+def _singularities(
+    proj: ImpactProjectors,
+    psi_t: sp.Expr,
+    matrix: sp.Matrix,
+    offset: sp.Matrix,
+    W: sp.Matrix,
+    given_velocity: sp.Matrix | None,
+    energy: EnergyLaw | None,
+) -> list[Singularity]:
+    """Where the map is singular (:func:`impact_singularities` over its closed forms), and
+    for the energy law the branch point of its square root."""
+    if energy is None:
+        closed, scan = [*matrix, *offset], []
+    else:
+        closed = [*energy.tangential, *energy.direction, *W]
+        scan = [w for w, _ in energy.squares]
+    singularities = impact_singularities(
+        proj,
+        psi_t,
+        default_velocity=given_velocity is None,
+        extra=list(given_velocity) if given_velocity is not None else [],
+        closed_form=closed,
+        also_scan=scan,
+    )
+    if energy is not None:
+        singularities.append(
+            Singularity(
+                energy.speed_squared,
+                "branch point of the square root in the energy law (grazing impact: no"
+                " normal relative velocity); v+ is continuous but not differentiable there",
+            )
+        )
+    return singularities
