@@ -200,57 +200,15 @@ def sweep(
     run = RunOptions.build(options, run_options)
     names, table = read_grid(grid)
     columns = resolve_columns(scene, names)
-    n = scene.n
-    pnames = [str(p) for p in scene.parameters]
-    given = {} if params is None else params
-    if not isinstance(given, Mapping):
-        raise SimulationError(f"params: expected a mapping name -> value, got {params!r}")
-    unknown = sorted(str(k) for k in given if str(k) not in pnames)
-    if unknown:
-        raise SimulationError(f"params: unknown {unknown}; the scene's parameters are {pnames}")
-    base_params = {str(k): real_number(v, f"params[{str(k)!r}]") for k, v in given.items()}
-    set_p = {pnames[i] for i in columns.params if i >= 0}
-    missing = [p for p in pnames if p not in base_params and p not in set_p]
-    base_q = _base_state(q0, n, "q0")
-    base_v = _base_state(v0, n, "v0")
-    decl = scene.declaration
-    for what, base, index, syms in (
-        ("q0", base_q, columns.q, decl.coordinates),
-        ("v0", base_v, columns.v, decl.velocities),
-    ):
-        if np.isnan(base).any():
-            free = [str(syms[i]) for i in range(n) if i not in index]
-            if free:
-                missing.append(f"{what} (no column sets {free} and {what} is not given)")
-    if missing:
-        raise SimulationError(f"sweep: missing values for {missing}")
-    if isinstance(outputs, str) or not isinstance(outputs, Sequence):
-        unknown_out = [outputs]
-    else:
-        unknown_out = [o for o in outputs if o not in OUTPUTS]
-    if unknown_out:
-        raise SimulationError(
-            f"outputs: expected a sequence of names from {OUTPUTS}, got {outputs!r}"
-        )
-    exprs = _expressions(scene, expressions)
-    taken = set(names) | set(FIXED_COLUMNS) | {"run"}
-    taken |= {f"{s}_final" for s in [*decl.coordinates, *decl.velocities]}
-    clash = sorted(({*outputs} | set(exprs)) & taken) + sorted(set(outputs) & set(exprs))
-    if clash or len(set(outputs)) != len(outputs):
-        raise SimulationError(f"outputs and expressions: repeated column names {clash}")
-    if store is not None and not isinstance(store, str | os.PathLike):
-        raise SimulationError(f"store: expected a folder path, got {store!r}")
-    if threads is None:
-        threads = os.cpu_count() or 1
-    threads = count(threads, "threads")
-    if client is not None and not (hasattr(client, "submit") and hasattr(client, "scatter")):
-        raise SimulationError(
-            f"client: expected a dask.distributed.Client, got {type(client).__name__}"
-        )
-    opts, loop = _loop(run, t_end, INFO_HEAD + 2 * n)
+    base_params = _base_params(scene, params)
+    base_q, base_v = _base_state(q0, scene.n, "q0"), _base_state(v0, scene.n, "v0")
+    _check_complete(scene, columns, base_params, base_q, base_v)
+    exprs = _checked_outputs(scene, names, outputs, expressions)
+    threads = _checked_route(store, threads, client)
+    opts, loop = _loop(run, t_end, INFO_HEAD + 2 * scene.n)
     system = system_for(scene, "c", strategy, definitions)
     build_contact_sets(system)
-    fns = Functions(system, {p: 1.0 for p in pnames})
+    fns = Functions(system, {str(p): 1.0 for p in scene.parameters})
     lib = library(system)
     plan = Plan(
         scene=scene,
@@ -271,6 +229,81 @@ def sweep(
     ).attach(system)
     plan.expression_functions()  # built here once, so a bad expression fails before any run
     return _execute(plan, table, client, chunk, threads, store, progress, expressions)
+
+
+def _base_params(scene: Scene, params: Mapping[str, float] | None) -> dict[str, float]:
+    """The parameter values no grid column sets, checked real and named by the scene."""
+    pnames = [str(p) for p in scene.parameters]
+    given = {} if params is None else params
+    if not isinstance(given, Mapping):
+        raise SimulationError(f"params: expected a mapping name -> value, got {params!r}")
+    unknown = sorted(str(k) for k in given if str(k) not in pnames)
+    if unknown:
+        raise SimulationError(f"params: unknown {unknown}; the scene's parameters are {pnames}")
+    return {str(k): real_number(v, f"params[{str(k)!r}]") for k, v in given.items()}
+
+
+def _check_complete(
+    scene: Scene,
+    columns: Any,
+    base_params: Mapping[str, float],
+    base_q: np.ndarray,
+    base_v: np.ndarray,
+) -> None:
+    """Every parameter and every initial coordinate and velocity is set, by the grid or by
+    the values given; else a :class:`SimulationError` naming the missing ones."""
+    pnames = [str(p) for p in scene.parameters]
+    set_p = {pnames[i] for i in columns.params if i >= 0}
+    missing = [p for p in pnames if p not in base_params and p not in set_p]
+    decl, n = scene.declaration, scene.n
+    for what, base, index, syms in (
+        ("q0", base_q, columns.q, decl.coordinates),
+        ("v0", base_v, columns.v, decl.velocities),
+    ):
+        if np.isnan(base).any():
+            free = [str(syms[i]) for i in range(n) if i not in index]
+            if free:
+                missing.append(f"{what} (no column sets {free} and {what} is not given)")
+    if missing:
+        raise SimulationError(f"sweep: missing values for {missing}")
+
+
+def _checked_outputs(
+    scene: Scene,
+    names: Sequence[str],
+    outputs: Sequence[str],
+    expressions: Mapping[str, Any] | None,
+) -> dict[str, Any]:
+    """The expressions' columns (:func:`_expressions`), the outputs checked known, and no
+    column name repeated among the grid's, the fixed ones, the outputs and expressions."""
+    if isinstance(outputs, str) or not isinstance(outputs, Sequence):
+        unknown_out = [outputs]
+    else:
+        unknown_out = [o for o in outputs if o not in OUTPUTS]
+    if unknown_out:
+        raise SimulationError(
+            f"outputs: expected a sequence of names from {OUTPUTS}, got {outputs!r}"
+        )
+    exprs = _expressions(scene, expressions)
+    decl = scene.declaration
+    taken = set(names) | set(FIXED_COLUMNS) | {"run"}
+    taken |= {f"{s}_final" for s in [*decl.coordinates, *decl.velocities]}
+    clash = sorted(({*outputs} | set(exprs)) & taken) + sorted(set(outputs) & set(exprs))
+    if clash or len(set(outputs)) != len(outputs):
+        raise SimulationError(f"outputs and expressions: repeated column names {clash}")
+    return exprs
+
+
+def _checked_route(store: Any, threads: int | None, client: Any) -> int:
+    """The number of threads (default: every core), ``store`` and ``client`` checked."""
+    if store is not None and not isinstance(store, str | os.PathLike):
+        raise SimulationError(f"store: expected a folder path, got {store!r}")
+    threads = count((os.cpu_count() or 1) if threads is None else threads, "threads")
+    if client is not None and not (hasattr(client, "submit") and hasattr(client, "scatter")):
+        raise SimulationError(
+            f"client: expected a dask.distributed.Client, got {type(client).__name__}"
+        )
+    return threads
 
 
 def _execute(
