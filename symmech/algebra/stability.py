@@ -41,7 +41,7 @@ from symmech.algebra import budget as limits
 from symmech.algebra.memo import expression_cache
 from symmech.algebra.zero import evidently_nonzero, is_zero
 
-__all__ = ["stable_coefficient", "stable_entry", "stable_linear", "stable_matrix", "state_radical"]
+__all__ = ["stable_coefficient", "stable_entry", "stable_linear", "stable_matrix"]
 
 
 @expression_cache(maxsize=4096)
@@ -92,7 +92,7 @@ def _evidently_irreducible(e: sp.Expr) -> sp.Expr | None:
 def stable_entry(expr: sp.Expr, state: Iterable[sp.Symbol]) -> sp.Expr:
     """The form in which generated code evaluates a velocity-free entry (a metric, a
     constraint one-form, a wall's gradient): :func:`stable_coefficient`, except for a sum
-    holding a radical of the state (:func:`state_radical`) and products of sums (its
+    holding a radical of the state (:func:`_state_radical`) and products of sums (its
     expansion, :func:`symmech.algebra.budget.expanded_terms`, has more terms than it
     has), which is kept as written, or 0 when it is identically zero
     (:func:`symmech.algebra.zero.is_zero`).
@@ -107,14 +107,14 @@ def stable_entry(expr: sp.Expr, state: Iterable[sp.Symbol]) -> sp.Expr:
     st = frozenset(state)
     if (
         isinstance(expr, sp.Add)
-        and state_radical(expr, st)
+        and _state_radical(expr, st)
         and limits.expanded_terms(expr)[0] > len(expr.args)
     ):
         return expr if evidently_nonzero(expr) or not is_zero(expr) else sp.S.Zero
     return stable_coefficient(expr, st)
 
 
-def state_radical(expr: sp.Expr, state: Iterable[sp.Symbol]) -> bool:
+def _state_radical(expr: sp.Expr, state: Iterable[sp.Symbol]) -> bool:
     """Whether ``expr`` holds a fractional power of an expression of the ``state``
     (``sqrt(1 - sin(q2)^2 cos(q5)^2)``, a rolling contact's normal)."""
     st = frozenset(state)

@@ -15,10 +15,9 @@ cancel in the expression cancel there too (the same residue stands for the same 
 coefficient that does not cancel, of degree d in the parts, vanishes at the residues
 with probability below d / 2^61, Schwartz-Zippel); a cancellation that needs the parts'
 own algebra (sin^2 + cos^2 = 1) goes unseen, so the count is of the coefficients zero
-as written.  A velocity inside a non-polynomial part (``sin(v)``,
-``1/(1 + v)``), or a term whose expansion would exceed
-:data:`symmech.algebra.budget.NOTE_EXPAND_TERMS` terms, counts every pair of its
-velocities as present, and the note then says "at least".
+as written.  A velocity inside a non-polynomial part (``sin(v)``, ``1/(1 + v)``), or a
+term whose expansion would exceed :data:`symmech.algebra.budget.NOTE_EXPAND_TERMS` terms,
+counts every pair of its velocities as present, and the note then says "at least".
 """
 
 from __future__ import annotations

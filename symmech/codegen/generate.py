@@ -195,8 +195,7 @@ def _lowered(
 
     done: dict[str, LoweredFunction] = {}
     for f in plan.functions:
-        called = f.calls or (f.part_of[0] if f.part_of else None)
-        done[f.name] = lower_one(f, done[called] if called is not None else None)
+        done[f.name] = lower_one(f, done[f.callee] if f.callee is not None else None)
     shared, done = share_constrained_solve(plan, done, lower_one)
     return shared, tuple(done.values())
 

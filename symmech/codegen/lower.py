@@ -209,9 +209,8 @@ def lower(
     parameters (:func:`_scalar_body`).  ``memo`` carries what the functions of one scene
     share (:class:`Memo`; a fresh one when omitted)."""
     memo = memo if memo is not None else Memo()
-    target = f.calls or (f.part_of[0] if f.part_of else None)
-    if target is not None and (callee is None or callee.name != target):
-        raise CodegenError(f"{f.name} calls {target}: lower it first and pass it as callee")
+    if f.callee is not None and (callee is None or callee.name != f.callee):
+        raise CodegenError(f"{f.name} calls {f.callee}: lower it first and pass it as callee")
     entries, where = _gathered(f, memo)
     check = f.step is None and any(b.name == "M" for b in f.blocks)
     program, entries, where = _traced(f, check, entries, where)
@@ -229,7 +228,7 @@ def lower(
     unpack = _unpack_entries(names, used)
     layout = _laid_out(f, check, program, printed, dialect)
     read = {k for k, _, _ in unpack} | ({"v"} if layout.reads_v else set())
-    if target is not None:
+    if f.callee is not None:
         read |= {"q", "v"}
     # the arguments p, t, u are taken when the printed code reads them (an unrolled solve
     # may read fewer than the plan's blocks mention) or the callee does

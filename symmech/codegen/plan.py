@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
 
 import sympy as sp
@@ -144,6 +144,12 @@ class FunctionPlan:
     uses_time: bool = False
     uses_inputs: bool = False
     uses_parameters: bool = False
+
+    @property
+    def callee(self) -> str | None:
+        """The function this one calls (``calls``) or is part of (``part_of``): it is
+        lowered first, and what it reads (t, inputs, parameters) this one reads too."""
+        return self.calls or (self.part_of[0] if self.part_of else None)
 
     @property
     def out_size(self) -> int:
@@ -418,30 +424,28 @@ class _FunctionPlans:
         stray = sorted(str(s) for s in syms - self.fixed - slots)
         if stray:
             raise CodegenError(f"{name}: symbols {stray} are neither state nor parameters")
-        uses_t = TIME in syms
-        uses_u = bool(syms & slots)
-        uses_p = bool(syms & set(self.runtime))
-        called = options.get("calls") or (options.get("part_of") or (None,))[0]
-        if called is not None:
-            callee = next(f for f in self.plans if f.name == called)
-            uses_t |= callee.uses_time
-            uses_u |= callee.uses_inputs
-            uses_p |= callee.uses_parameters
-        self.plans.append(
-            FunctionPlan(
-                name=name,
-                kind=kind,
-                doc=doc,
-                equation=equation,
-                state=state,
-                blocks=tuple(prepared),
-                out_shape=out_shape,
-                uses_time=uses_t,
-                uses_inputs=uses_u,
-                uses_parameters=uses_p,
-                **options,
-            )
+        plan = FunctionPlan(
+            name=name,
+            kind=kind,
+            doc=doc,
+            equation=equation,
+            state=state,
+            blocks=tuple(prepared),
+            out_shape=out_shape,
+            uses_time=TIME in syms,
+            uses_inputs=bool(syms & slots),
+            uses_parameters=bool(syms & set(self.runtime)),
+            **options,
         )
+        if plan.callee is not None:
+            callee = next(f for f in self.plans if f.name == plan.callee)
+            plan = replace(
+                plan,
+                uses_time=plan.uses_time or callee.uses_time,
+                uses_inputs=plan.uses_inputs or callee.uses_inputs,
+                uses_parameters=plan.uses_parameters or callee.uses_parameters,
+            )
+        self.plans.append(plan)
 
 
 def _build(
