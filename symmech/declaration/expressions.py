@@ -168,22 +168,7 @@ def parse_expression(
         raise src.error("empty expression")
     _check_brackets(src, max_depth)
     _check_operands(src, max_nodes)
-    try:
-        with warnings.catch_warnings():
-            # "1if x else y" and the like: refused (a SyntaxWarning raised as an error
-            # becomes a SyntaxError), and nothing leaks to the caller's warnings.
-            warnings.simplefilter("error", SyntaxWarning)
-            warnings.simplefilter("ignore", DeprecationWarning)
-            tree = ast.parse(_joined(src), mode="eval")
-    except SyntaxError as exc:
-        raise _syntax_error(src, exc) from None
-    except (RecursionError, MemoryError):
-        raise src.error(
-            "expression too complex for Python's parser (too long a chain of operators or"
-            f" too deeply nested; limits max_nodes={max_nodes}, max_depth={max_depth})"
-        ) from None
-    except ValueError as exc:
-        raise src.error(f"cannot parse: {exc}") from None
+    tree = _syntax_tree(src, max_nodes, max_depth)
     parser = _Parser(
         src,
         symbols,
@@ -198,6 +183,27 @@ def parse_expression(
     except RecursionError:
         raise src.error(f"expression too deeply nested (limit max_depth={max_depth})") from None
     return parser.finish(tree.body, value)
+
+
+def _syntax_tree(src: _Source, max_nodes: int, max_depth: int) -> ast.Expression:
+    """Python's syntax tree of the text (parsed, never run); a syntax error, or a text too
+    complex for Python's parser, as an :class:`ExpressionError` naming the position."""
+    try:
+        with warnings.catch_warnings():
+            # "1if x else y" and the like: refused (a SyntaxWarning raised as an error
+            # becomes a SyntaxError), and nothing leaks to the caller's warnings.
+            warnings.simplefilter("error", SyntaxWarning)
+            warnings.simplefilter("ignore", DeprecationWarning)
+            return ast.parse(_joined(src), mode="eval")
+    except SyntaxError as exc:
+        raise _syntax_error(src, exc) from None
+    except (RecursionError, MemoryError):
+        raise src.error(
+            "expression too complex for Python's parser (too long a chain of operators or"
+            f" too deeply nested; limits max_nodes={max_nodes}, max_depth={max_depth})"
+        ) from None
+    except ValueError as exc:
+        raise src.error(f"cannot parse: {exc}") from None
 
 
 def to_expression(

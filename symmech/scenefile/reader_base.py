@@ -177,7 +177,36 @@ class _LoaderBase:
         self, value: object, field: str, line: int | None, table: Mapping[str, sp.Expr]
     ) -> sp.Expr | None:
         """Parse one scalar entry: a number or an expression string."""
-        if isinstance(value, bool) or not isinstance(value, int | float | str):
+        if not isinstance(value, str):
+            return self._number(value, field, line)
+        # the line where the text starts: a multi-line string's content starts below its key
+        line = self.loc.element(line, value)
+        if not self._affordable(value, field, line):
+            return None
+        try:
+            # each expression may use what the file's budget has left (the file's size
+            # bounds its length)
+            expr = parse_expression(
+                value,
+                table,
+                field=field,
+                line=line,
+                max_length=MAX_FILE_BYTES,
+                max_nodes=self.nodes_left,
+            )
+        except ExpressionError as exc:
+            self._refused(exc, field, line, table)
+            return None
+        self.used |= expr.free_symbols
+        # what reading it cost: the nodes parsed (an entry such as y + y + ... + y parses
+        # to many and builds few), or built, whichever is more
+        self.nodes_left -= max(tree_size(expr), text_nodes(value))
+        return expr
+
+    def _number(self, value: object, field: str, line: int | None) -> sp.Expr | None:
+        """A number entry as an exact Integer or a Float; None after recording why it is
+        not one (a boolean, another TOML type, an infinite float, too many digits)."""
+        if isinstance(value, bool) or not isinstance(value, int | float):
             self.fail(
                 f"expected a number or an expression string, got {_toml_type(value)}",
                 field,
@@ -195,12 +224,13 @@ class _LoaderBase:
                 _short(value, 20),
             )
             return None
-        if isinstance(value, int | float):
-            return sp.Integer(value) if isinstance(value, int) else sp.Float(value)
-        # the line where the text starts: a multi-line string's content starts below its key
-        line = self.loc.element(line, value)
+        return sp.Integer(value) if isinstance(value, int) else sp.Float(value)
+
+    def _affordable(self, value: str, field: str, line: int | None) -> bool:
+        """Whether the file's budget allows parsing ``value``: operands and operations left,
+        and distinct function applications; else the budget is recorded as run out."""
         if self.over_budget:
-            return None  # (reported once, where the file's budget ran out)
+            return False  # (reported once, where the file's budget ran out)
         if self.nodes_left <= 0:
             self._over_budget(
                 f"the file's expressions hold more than {MAX_FILE_NODES} operands and"
@@ -208,7 +238,7 @@ class _LoaderBase:
                 field,
                 line,
             )
-            return None
+            return False
         self.calls |= applications(value)
         if len(self.calls) > MAX_FILE_CALLS:
             self._over_budget(
@@ -217,55 +247,43 @@ class _LoaderBase:
                 field,
                 line,
             )
-            return None
-        try:
-            # each expression may use what the file's budget has left (the file's size
-            # bounds its length)
-            expr = parse_expression(
-                value,
-                table,
-                field=field,
-                line=line,
-                max_length=MAX_FILE_BYTES,
-                max_nodes=self.nodes_left,
+            return False
+        return True
+
+    def _refused(
+        self, exc: ExpressionError, field: str, line: int | None, table: Mapping[str, sp.Expr]
+    ) -> None:
+        """Record why an expression string was refused, in the words of the file: the
+        budget, a function of time called, a declared name where it may not appear."""
+        token = getattr(exc, "token", None)
+        if "expression too large" in str(exc):
+            self._over_budget(
+                f"expression too large: the file's expressions hold more than"
+                f" {MAX_FILE_NODES} operands and operations together (limit"
+                f" MAX_FILE_NODES={MAX_FILE_NODES})",
+                field,
+                getattr(exc, "line", line),
             )
-        except ExpressionError as exc:
-            token = getattr(exc, "token", None)
-            if "expression too large" in str(exc):
-                self._over_budget(
-                    f"expression too large: the file's expressions hold more than"
-                    f" {MAX_FILE_NODES} operands and operations together (limit"
-                    f" MAX_FILE_NODES={MAX_FILE_NODES})",
-                    field,
-                    getattr(exc, "line", line),
-                )
-                return None
-            if token in self.function_names and "not a function" in str(exc):
-                self.fail(
-                    f"'{token}' is a function of time: write it by name alone ('{token}'"
-                    f" means {token}(t)), not called",
-                    field,
-                    getattr(exc, "line", line),
-                    token,
-                )
-            elif token in self.reserved and token not in table and "unknown name" in str(exc):
-                # a declared name where it may not appear: a velocity in the metric, ...
-                at_line = getattr(exc, "line", None) or line
-                column = getattr(exc, "column", None)
-                where = f"{field} (line {at_line}, col {column})" if column else field
-                self.problems.items.append(
-                    f"{self.problems.source}: {where}: '{token}' is {self.reserved[token]}; it"
-                    f" may not appear in {field} (allowed: {_allowed_kinds(field)})"
-                )
-                self.problems.details.append((field, at_line, token))
-            else:
-                self.problems.expression_error(exc, field)
-            return None
-        self.used |= expr.free_symbols
-        # what reading it cost: the nodes parsed (an entry such as y + y + ... + y parses
-        # to many and builds few), or built, whichever is more
-        self.nodes_left -= max(tree_size(expr), text_nodes(value))
-        return expr
+        elif token in self.function_names and "not a function" in str(exc):
+            self.fail(
+                f"'{token}' is a function of time: write it by name alone ('{token}'"
+                f" means {token}(t)), not called",
+                field,
+                getattr(exc, "line", line),
+                token,
+            )
+        elif token in self.reserved and token not in table and "unknown name" in str(exc):
+            # a declared name where it may not appear: a velocity in the metric, ...
+            at_line = getattr(exc, "line", None) or line
+            column = getattr(exc, "column", None)
+            where = f"{field} (line {at_line}, col {column})" if column else field
+            self.problems.items.append(
+                f"{self.problems.source}: {where}: '{token}' is {self.reserved[token]}; it"
+                f" may not appear in {field} (allowed: {_allowed_kinds(field)})"
+            )
+            self.problems.details.append((field, at_line, token))
+        else:
+            self.problems.expression_error(exc, field)
 
     def _over_budget(self, message: str, field: str, line: int | None) -> None:
         self.over_budget = True
