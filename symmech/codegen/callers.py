@@ -159,6 +159,11 @@ def _float_lists(args: Sequence[object]) -> list[list] | None:
         return None
 
 
+#: How a one-state NumPy variant fails: math's domain and overflow errors, a failed
+#: factorisation (the general path then explains).
+_EVALUATION_FAILURES = (ArithmeticError, ValueError, np.linalg.LinAlgError)
+
+
 def numpy_fast(
     one: Callable, spec: LoweredFunction, n: int, n_parameters: int, rules: Sequence[ParameterRule]
 ) -> Fast:
@@ -174,14 +179,18 @@ def numpy_fast(
 
     flat = len(out_shape) == 1
 
-    def evaluate(values: list) -> np.ndarray | None:
+    def outcome(values: list) -> list | None:
         try:
             out = one(*values)
-        except (ArithmeticError, ValueError, np.linalg.LinAlgError):
-            return None  # math's domain and overflow errors, a failed factorisation
+        except _EVALUATION_FAILURES:
+            return None
         # a finite sum means finite entries (an inf or a NaN makes any sum inf or NaN);
         # a sum that overflows sends a finite output to the general path, which is exact
-        if not isfinite(sum(out)):
+        return out if isfinite(sum(out)) else None
+
+    def evaluate(values: list) -> np.ndarray | None:
+        out = outcome(values)
+        if out is None:
             return None
         return np.array(out) if flat else np.array(out).reshape(out_shape)
 
@@ -220,27 +229,31 @@ def numpy_fast(
 
         return bound
 
-    def plain(params: np.ndarray | None) -> Callable[..., list | None] | None:
-        """The one-state function over plain lists of floats (the state arrays as lists,
-        each of its length) at parameters already checked: its output as a flat list, or
-        None when the evaluation fails or is not finite (the general path explains).  For
-        a loop of its own that converts a state once and calls several functions on it."""
-        if not spec.one_state_fast or (params is not None and params.ndim != 1):
-            return None
-        p = [params.tolist()] if spec.takes_parameters and params is not None else []
-
-        def call(*values: list) -> list | None:
-            try:
-                out = one(*values, *p)
-            except (ArithmeticError, ValueError, np.linalg.LinAlgError):
-                return None
-            return out if isfinite(sum(out)) else None
-
-        return call
-
     fast.bind = bind  # type: ignore[attr-defined]
-    fast.plain = plain  # type: ignore[attr-defined]
+    fast.plain = lambda params: _plain_caller(one, spec, params)  # type: ignore[attr-defined]
     return fast
+
+
+def _plain_caller(
+    one: Callable, spec: LoweredFunction, params: np.ndarray | None
+) -> Callable[..., list | None] | None:
+    """The one-state function over plain lists of floats (the state arrays as lists,
+    each of its length) at parameters already checked: its output as a flat list, or
+    None when the evaluation fails or is not finite (the general path explains).  For
+    a loop of its own that converts a state once and calls several functions on it."""
+    if not spec.one_state_fast or (params is not None and params.ndim != 1):
+        return None
+    p = [params.tolist()] if spec.takes_parameters and params is not None else []
+    isfinite = math.isfinite
+
+    def call(*values: list) -> list | None:  # (a hot path: no list built per call)
+        try:
+            out = one(*values, *p)
+        except _EVALUATION_FAILURES:
+            return None
+        return out if isfinite(sum(out)) else None
+
+    return call
 
 
 def _prototypes(lib: ctypes.CDLL, prefix: str, spec: LoweredFunction) -> tuple[Any, Any]:
