@@ -80,6 +80,14 @@ CASES: dict[str, Case] = {
             "Carnot 3.7 disc thrown onto the rough floor with backspin: rolls after impacts",
         ),
         Case(
+            "disk_3_7_gravity",
+            (0.0, 1.0, 0.0),
+            (1.0, 0.0, 3.0),
+            2.1,
+            "the disc's first 6 impacts, before the accumulation (where the baseline works)",
+            label="disk_3_7_gravity_flight",
+        ),
+        Case(
             "carnot_3_13",
             (2.0, 0.0, 1.0, 0.1, 1.0, 0.2),
             (-1.0, 0.0, 0.0, 0.0, -2.0, 0.3),
