@@ -14,6 +14,14 @@ normal rate; a wall released and not yet left (banded) through ``psi + tol_psi``
 inside a wall counts as ``psi(t0) = 0`` (a further dip is an event at once), and a wall
 grazed and not left since as inside it.
 
+Where the flow gives the gaps' rates at the stages of the step (``seg.gap_rates``: the
+walls' columns of the stages of an :class:`~symmech.simulate.flow.AugmentedFlow`), a step
+whose rates never turn from negative to positive holds no minimum of a gap: it is not
+searched when every gap ends at or above zero, and where one ends below, its first negative
+sample is found by bisection and the search looks there (:meth:`StepSearch._first_sample`).
+The bracket is the one the sampled search finds, so the event is the same, bit for bit;
+the step's continuous output is formed only where it is read.
+
 The gaps are evaluated through the functions' direct one-state callers
 (:meth:`Functions.gap_function <symmech.simulate.functions.Functions.gap_function>`).  A
 gap reads only the coordinates: where every event function of the step is a gap and the
@@ -28,6 +36,7 @@ system it is most of the search's cost).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -55,6 +64,9 @@ class StepSearch:
         self.divided: list[bool] = []
         self.start: list[Any] = []
         self.band: list[bool] = []
+        #: per event function: whether the stage rates may stand in for its samples
+        #: (:meth:`_first_sample`)
+        self.screenable: list[bool] = []
         #: per event function: whether it is a contact force (a force's sign change is
         #: ``g > 0 -> g <= 0``, a gap's ``g >= 0 -> g < 0``), and its evaluation at (t, y)
         self.force = [what == "release" for _, what in self.funcs]
@@ -72,6 +84,7 @@ class StepSearch:
             self.divided.append(False)
             self.start.append(None)
             self.band.append(False)
+            self.screenable.append(False)
             return
         n = run.n
         psi0 = gap(seg.t0, seg.y0[:n])
@@ -81,6 +94,7 @@ class StepSearch:
         divided = not banded and rate0 is not None and rate0 > 0 and w not in run.grazing
         self.divided.append(divided)
         self.band.append(banded)
+        self.screenable.append(not banded and w not in run.grazing and (divided or g0 >= 0))
         if w in run.grazing:  # grazed, not left since: counts as inside until it leaves
             self.start.append(0 * psi0 - 1)
         elif divided:
@@ -132,15 +146,65 @@ class StepSearch:
         times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
         # on a step a few ulps long the samples round onto each other: keep distinct times
         times = [tk for k, tk in enumerate(times) if k == 0 or tk > times[k - 1]]
-        vals = [[self.value(i, t0, seg.y0) if s is None else s for i, s in enumerate(self.start)]]
+        start = [self.value(i, t0, seg.y0) if s is None else s for i, s in enumerate(self.start)]
         row, evals = self._sampled(times)
+        known: dict[int, list[Any]] = {0: start}
+
+        def at(k: int) -> list[Any]:
+            """The event functions at sample ``k`` (each sample evaluated once)."""
+            out = known.get(k)
+            if out is None:
+                tk, yk = times[k], row(k)
+                out = known[k] = [g(tk, yk) for g in evals]
+            return out
+
+        first = self._first_sample(times, at)
+        if first is None:
+            return None
+        vals = [start]
         for k in range(1, len(times)):
-            tk, yk = times[k], row(k)
-            vals.append([g(tk, yk) for g in evals])
-            brackets = self._brackets(times, vals, k)
-            if brackets:
-                return self._locate(brackets)
+            # samples before first - 2 are never read by _brackets from ``first`` on
+            vals.append(at(k) if k >= first - 2 else [])
+            if k >= first:
+                brackets = self._brackets(times, vals, k)
+                if brackets:
+                    return self._locate(brackets)
         return None
+
+    def _first_sample(self, times: list, at: Callable[[int], list[Any]]) -> int | None:
+        """The first sample at which the search must look for a bracket (1: every
+        sample), or None when the step holds no event, as the rates of the walls' gaps at
+        the stages of the step show (``seg.gap_rates``, where the flow has them).
+
+        Where no gap's rate turns from negative to positive at the stages (taken in the
+        order of their times), no gap has a minimum inside the step: each is largest
+        inside or monotone, so its least value is at an end, and a gap left by the step
+        (psi(t0) >= 0 and psi(t1) >= 0, or leaving a wall at t0) has no event in it.  A
+        gap below zero at t1 then crosses zero once: its first negative sample is found
+        by bisection over the samples (a few evaluations where the sampled search takes
+        up to ``samples``), and the search looks there, with the samples it reads
+        evaluated as it would.  Any other step (a rate that turns, a contact force, a
+        banded, grazed or entered wall, no stages) is searched sample by sample."""
+        rates = self.seg.gap_rates
+        if rates is None or len(times) < 3 or not all(self.screenable):
+            return 1
+        per_wall = rates[1]
+        if not all(_no_minimum(per_wall[w]) for w, _ in self.funcs):
+            return 1
+        last = len(times) - 1
+        first = None
+        for i, g in enumerate(at(last)):
+            if g >= 0 or g != g:  # no sign change at t1 (NaN: none either)
+                continue
+            lo, hi = 0, last  # f(lo) >= 0 > f(hi)
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                if at(mid)[i] < 0:
+                    hi = mid
+                else:
+                    lo = mid
+            first = hi if first is None else min(first, hi)
+        return first
 
     def _sampled(self, times: list) -> tuple[Any, list[Any]]:
         """``(row, functions)``: the argument of the event functions at sample ``k``
@@ -151,7 +215,16 @@ class StepSearch:
         seg = self.seg
         head = seg.head
         if head is None or any(self.force):
-            return seg.samples(times).__getitem__, self.evals
+            states: list[list[np.ndarray]] = []
+
+            def state(k: int) -> np.ndarray:
+                if times[k] == seg.t1:  # as Segment.samples, without the others
+                    return seg.y1
+                if not states:
+                    states.append(seg.samples(times))
+                return states[0][k]
+
+            return state, self.evals
         n, t1 = self.run.n, seg.t1
         rules = [self._gap_rule(i) for i in range(len(self.funcs))]
 
@@ -232,6 +305,18 @@ class StepSearch:
         lo = min(a, b)
         step = 4 * eps * max(abs(lo), scale)
         return lo if self.value(i, lo, refine(lo)) >= 0 else lo - step
+
+
+def _no_minimum(rates: list[float]) -> bool:
+    """Whether the rates of a gap, in time order, never turn from negative to positive
+    (then the gap has no minimum between them)."""
+    falling = False
+    for r in rates:
+        if r < 0:
+            falling = True
+        elif r > 0 and falling:
+            return False
+    return True
 
 
 def parabola_dip(ts: list, gs: list) -> Any:

@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from operator import itemgetter
 from typing import Any
 
 import numpy as np
@@ -43,7 +44,12 @@ class Segment:
     ``dense(t)`` for t in [t0, t1]; ``many(ts)``, where the flow has it, is ``dense`` at
     the times ``ts`` at once (rows of an array: the same values, element by element), and
     ``head(t, m)`` the first ``m`` entries of ``dense(t)`` as a list of floats (the same
-    values)."""
+    values).
+
+    ``stages``, where the method has them, is ``(nodes, K)``: the derivatives ``K`` (rows)
+    of the explicit step at the times ``t0 + theta h`` of ``nodes``.  A step of an
+    :class:`AugmentedFlow` carries instead ``gap_rates = (thetas, rates)``: the nodes in
+    increasing order and, for each wall, d psi/dt at them (the walls' columns of ``K``)."""
 
     t0: float
     t1: float
@@ -53,6 +59,8 @@ class Segment:
     dense: Callable[[float], np.ndarray]
     many: Callable[[Sequence[float]], np.ndarray] | None = None
     head: Callable[[float, int], list[float]] | None = None
+    stages: tuple[Sequence[float], np.ndarray] | None = None
+    gap_rates: tuple[list[float], list[list[float]]] | None = None
 
     def samples(self, times: Sequence[Any]) -> list[np.ndarray]:
         """The states at ``times`` (in [t0, t1]): ``y0`` at t0, ``y1`` at t1, the
@@ -194,7 +202,8 @@ class RKFlow:
             def head(tt: float, m: int, _d: Any = dense_step, _t0: float = t, _h: float = h):
                 return _d.head((tt - _t0) / _h, m)
 
-        seg = Segment(t, t1, y, st.y, st.f, dense, many, head)
+        stages = None if st.stages is None else (self.stepper.nodes, st.stages)
+        seg = Segment(t, t1, y, st.y, st.f, dense, many, head, stages)
         self.t, self.y, self.fy = t1, st.y, st.f
         return seg
 
@@ -232,6 +241,7 @@ class ScipyFlow:
         if name is None:
             raise ValueError(f"scipy method must be one of {self.METHODS}, got {method!r}")
         self.cls = getattr(integrate, name)
+        self._dop853 = integrate.DOP853
         self.implicit = name in ("Radau", "BDF", "LSODA")
         self.f, self.jac = f, jac
         self.rtol, self.atol, self.max_step = rtol, atol, max_step
@@ -289,19 +299,24 @@ class ScipyFlow:
         # solvers), so a restart after a projection keeps growing the step
         # (LSODA exposes none: twice its last step, which it cuts back if need be)
         self.h = getattr(s, "h_abs", None) or 2 * s.step_size or self.h
-        dense = s.dense_output()
+        dense = _LazyDense(s)
 
         def continuous(tt: float) -> np.ndarray:
-            return dense(tt)
+            return dense()(tt)
 
         many = head = None
-        if type(dense).__name__ == "Dop853DenseOutput":  # element by element, as one call
+        if isinstance(s, self._dop853):  # element by element, as one call
 
             def many(ts: Sequence[float]) -> np.ndarray:
-                return dense(np.asarray(ts, dtype=float)).T
+                return dense()(np.asarray(ts, dtype=float)).T
 
-            head = _dop853_head(dense)
-        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head)
+            def head(tt: float, m: int) -> list[float]:
+                entries = dense.head
+                if entries is None:
+                    entries = dense.head = _dop853_head(dense()) or _array_head(dense())
+                return entries(tt, m)
+
+        return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head, dense.stages)
 
     def limit_step(self, h: float) -> None:
         """As :meth:`RKFlow.limit_step` (the next solver's first step)."""
@@ -320,6 +335,47 @@ class ScipyFlow:
         if np.max(np.abs(y - self.solver.y) / scale) < 1:
             return
         self.start(float(self.solver.t), y, self.t_bound)
+
+
+class _LazyDense:
+    """SciPy's continuous output of the step a solver has just taken, formed on the first
+    call (``self()``): a step whose output is never read (the event search certifies most)
+    skips its extra stages.  ``dense_output`` reads the solver's last step and the stage
+    array it overwrites in the next, so it runs on a shallow copy of the solver that owns
+    copies of its stage arrays: the same operations on the same numbers."""
+
+    def __init__(self, solver: Any):
+        self._dense: Any = None
+        self.head: Callable[[float, int], list[float]] | None = None
+        #: ``Segment.stages`` of an explicit Runge-Kutta solver: its nodes ``C`` and the
+        #: stages ``K`` (the last row ``f(t1, y1)``); else None
+        self.stages: tuple[Sequence[float], np.ndarray] | None = None
+        snapshot = object.__new__(type(solver))  # a shallow copy (copy.copy: 3x slower)
+        snapshot.__dict__.update(solver.__dict__)
+        extended = getattr(solver, "K_extended", None)
+        if extended is not None:  # DOP853: K is the first rows of K_extended
+            snapshot.K_extended = extended.copy()
+            snapshot.K = snapshot.K_extended[: solver.K.shape[0]]
+        elif isinstance(getattr(solver, "K", None), np.ndarray):
+            snapshot.K = solver.K.copy()
+        else:  # a solver with state of its own (Radau, BDF, LSODA): at once
+            self._dense = solver.dense_output()
+        if self._dense is None and isinstance(getattr(solver, "C", None), np.ndarray):
+            self.stages = ((*solver.C.tolist(), 1.0), snapshot.K)
+        self._solver = snapshot
+
+    def __call__(self) -> Any:
+        if self._dense is None:
+            self._dense = self._solver.dense_output()
+            self._solver = None
+        return self._dense
+
+
+def _array_head(dense: Any) -> Callable[[float, int], list[float]]:
+    def head(tt: float, m: int) -> list[float]:
+        return dense(tt)[:m].tolist()
+
+    return head
 
 
 def _dop853_head(dense: Any) -> Callable[[float, int], list[float]] | None:
@@ -367,6 +423,8 @@ class AugmentedFlow:
         augmented: Rhs | None = None,
     ):
         self.size, self._rhs, self._rates, self._gaps = size, rhs, rates, gaps
+        #: the nodes of a method's stages -> their order in time
+        self._orders: dict[Sequence[float], tuple[list[float], Any]] = {}
         self._jac = jac
         # ``augmented``: the same right-hand side fused (Functions.augmented), else built here
         f = self._augmented if augmented is None else augmented
@@ -421,7 +479,16 @@ class AugmentedFlow:
 
         f1 = None if seg.f1 is None else seg.f1[:k]
         # the first m <= k entries of the augmented state are those of the loop's
-        return Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many, seg.head)
+        out = Segment(seg.t0, seg.t1, seg.y0[:k], seg.y1[:k], f1, dense, many, seg.head)
+        if seg.stages is not None:
+            nodes, K = seg.stages
+            order = self._orders.get(nodes)
+            if order is None:
+                rows = sorted(range(len(nodes)), key=nodes.__getitem__)
+                order = self._orders[nodes] = ([nodes[i] for i in rows], itemgetter(*rows))
+            thetas, in_time = order
+            out.gap_rates = (thetas, [list(in_time(c)) for c in K[:, k:].T.tolist()])
+        return out
 
     def limit_step(self, h: float) -> None:
         self.inner.limit_step(h)

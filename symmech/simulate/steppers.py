@@ -84,6 +84,9 @@ class Step:
     dense: Dense  #: continuous output on the step
     nfev: int  #: rhs calls by this step (lazy dense stages included once made)
     njev: int = 0  #: Jacobian calls by this step
+    #: an explicit method's stage derivatives, the last row ``f``, at the times ``t0 +
+    #: theta h`` of its :attr:`ExplicitRK.nodes` (None for the other methods)
+    stages: np.ndarray | None = None
 
 
 def _rhs(f: Rhs, t: float, y: np.ndarray) -> np.ndarray:
@@ -158,6 +161,9 @@ class Stepper(ABC):
     dense_order: int  #: order of the dense output (local error O(h^(dense_order + 1)))
     adaptive: bool  #: False: error is 0.0 (fixed step; inf when the step is not finite)
     implicit: bool  #: True: step() needs jac
+    #: the times (fractions of the step) of the rows of :attr:`Step.stages` (explicit
+    #: methods; empty for the others, whose steps have no stages)
+    nodes: tuple[float, ...] = ()
 
     @abstractmethod
     def step(
@@ -187,23 +193,34 @@ class Stepper(ABC):
 
 
 class _PolyDense:
-    """``y(t0 + theta h) = y0 + sum_k Q_k theta^k`` (``Q = h K^T P``), by Horner's rule."""
+    """``y(t0 + theta h) = y0 + sum_k Q_k theta^k`` (``Q = h K^T P``), by Horner's rule;
+    ``Q`` is formed on the first call (a step whose continuous output is never read, as
+    the event search certifies, does not pay for it)."""
 
-    def __init__(self, t0: float, h: float, y0: np.ndarray, Q: np.ndarray):
-        self.t0, self.h, self._y0, self._Q = t0, h, y0, Q
+    def __init__(self, t0: float, h: float, y0: np.ndarray, K: np.ndarray, P: np.ndarray):
+        self.t0, self.h, self._y0 = t0, h, y0
+        self._K, self._P = K, P
+        self._Qm: np.ndarray | None = None
+
+    @property
+    def _Q(self) -> np.ndarray:
+        if self._Qm is None:
+            self._Qm = self.h * (self._K.T @ self._P)
+        return self._Qm
 
     def __call__(self, theta: float) -> np.ndarray:
-        acc = self._Q[:, -1].copy()
-        for k in range(self._Q.shape[1] - 2, -1, -1):
-            acc = acc * theta + self._Q[:, k]
+        Q = self._Q
+        acc = Q[:, -1].copy()
+        for k in range(Q.shape[1] - 2, -1, -1):
+            acc = acc * theta + Q[:, k]
         return self._y0 + theta * acc
 
     def many(self, thetas: np.ndarray) -> np.ndarray:
         """``self(theta)`` for each theta, as the rows of an array (the same operations)."""
-        s = thetas[:, None]
-        acc = np.broadcast_to(self._Q[:, -1], (len(thetas), self._Q.shape[0]))
-        for k in range(self._Q.shape[1] - 2, -1, -1):
-            acc = acc * s + self._Q[:, k]
+        Q, s = self._Q, thetas[:, None]
+        acc = np.broadcast_to(Q[:, -1], (len(thetas), Q.shape[0]))
+        for k in range(Q.shape[1] - 2, -1, -1):
+            acc = acc * s + Q[:, k]
         return self._y0 + s * acc
 
 
@@ -326,6 +343,7 @@ class ExplicitRK(Stepper):
         # its call overhead on these small arrays
         self._rows = [np.ascontiguousarray(self._a[i, :i]) for i in range(tableau.stages)]
         self._nodes = [float(c) for c in self._c]
+        self.nodes = (*self._nodes, 1.0)
 
     def _stages(self, f, t0, y0, f0, h) -> tuple[np.ndarray, np.ndarray]:
         """Stages ``K_0..K_s`` (``K_s = f(t0 + h, y1)``) and ``y1``."""
@@ -343,7 +361,7 @@ class ExplicitRK(Stepper):
         return _rms(h * self._e.dot(K) / _scale(y0, y1, rtol, atol))
 
     def _dense(self, f, t0, h, y0, y1, K) -> Dense:
-        return _PolyDense(t0, h, y0, h * (K.T @ self._P))
+        return _PolyDense(t0, h, y0, K, self._P)
 
     def step(self, f, t0, y0, f0, h, rtol, atol, jac=None) -> Step:
         h = _check_h(h)
@@ -351,7 +369,7 @@ class ExplicitRK(Stepper):
         K, y1 = self._stages(f, t0, y0, np.asarray(f0, dtype=float), h)
         error = self._error(K, h, y0, y1, rtol, atol) if self.adaptive else 0.0
         error = _finite_or_inf(error, y1, K[-1])
-        step = Step(y1, K[-1], error, None, self.tableau.stages)  # type: ignore[arg-type]
+        step = Step(y1, K[-1], error, None, self.tableau.stages, stages=K)  # type: ignore[arg-type]
         step.dense = self._dense(f, t0, h, y0, y1, K)
         if isinstance(step.dense, _Dop853Dense):
             step.dense.owner = step
