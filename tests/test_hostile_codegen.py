@@ -292,6 +292,7 @@ CODE = {
     "fn.out_size",
     "fn.out_shape",
     "fn.calls",
+    "fn.call_stop",  # an int (or None)
     "fn.part_of",  # (a generated function's name, an offset)
     "whole",  # the generated function that fn is part of (as callees[...])
     "fn.arguments",

@@ -77,7 +77,7 @@ class BuildContext:
 
     @property
     def needs_acceleration(self) -> bool:
-        return bool({"acceleration", "rhs"} & self.wanted)
+        return bool({"acceleration", "rhs", "augmented_rhs"} & self.wanted)
 
     def constrained_blocks(self) -> list[Block]:
         """g, f, the constraint one-forms and mu_dot v: the constrained system's inputs."""
@@ -215,6 +215,32 @@ def _rhs(c: BuildContext) -> None:
         )
 
 
+def _augmented_rhs(c: BuildContext) -> None:
+    """The right-hand side of the simulator's flow, whose state carries the walls' gaps
+    (:class:`symmech.simulate.flow.AugmentedFlow`): ``(q_dot, v_dot, r_1 .. r_W)`` with
+    ``r_w = d psi_w/dt = dpsi_w(q) q_dot + psi_t`` along the motion (the chain rule), in
+    one call; v_dot by the call of acceleration."""
+    walls = c.scene.walls
+    if "augmented_rhs" not in c.wanted:
+        return
+    if not walls:
+        c.omitted.append("augmented_rhs: the scene has no walls (rhs is its flow)")
+        return
+    qdot = sp.Matrix(c.scene.kinematics())
+    rates = [(_gradient(c, w) * qdot)[0, 0] + sp.diff(w.psi, TIME) for w in walls]
+    c.add(
+        "augmented_rhs",
+        "augmented_rhs",
+        "first-order system with the walls' gaps z: (q_dot, v_dot, dz_w/dt for each wall)",
+        "q_dot = S(q) v, v_dot = acceleration(q, v), dz_w/dt = dpsi_w(q) q_dot + psi_t,w",
+        ("y",),
+        # entries n .. 2n - 1 are the call's (zero until it writes them)
+        [vector_block("out", [*qdot, *[sp.S.Zero] * c.n, *rates])],
+        (2 * c.n + len(walls),),
+        calls="acceleration",
+    )
+
+
 def _jacobian(c: BuildContext) -> None:
     if "jacobian" not in c.wanted:
         return
@@ -235,7 +261,9 @@ def _jacobian(c: BuildContext) -> None:
 
 def _acceleration_note(c: BuildContext) -> None:
     if "acceleration" not in c.wanted and c.needs_acceleration:
-        c.omitted.append("acceleration was not asked for but is emitted: rhs calls it")
+        callers = " and ".join(k for k in ("rhs", "augmented_rhs") if k in c.wanted)
+        verb = "call" if " and " in callers else "calls"
+        c.omitted.append(f"acceleration was not asked for but is emitted: {callers} {verb} it")
 
 
 def _energy_function(c: BuildContext) -> None:
@@ -329,6 +357,7 @@ SCENE_BUILDERS: tuple[Callable[[BuildContext], None], ...] = (
     _dynamics,
     _acceleration,
     _rhs,
+    _augmented_rhs,
     _jacobian,
     _acceleration_note,
     _energy_function,

@@ -137,6 +137,9 @@ class LoweredFunction:
     scaled: bool = False  # evaluated for v / 2^e and scaled back (a static wall's impact)
     #: the one-state variant's body (NumPy backend: plain floats, ``math``), or None
     scalar: tuple[str, ...] | None = None
+    #: the end of the entries the called function writes, ``out[n:call_stop]``; None when
+    #: they are the tail of ``out`` (``rhs``)
+    call_stop: int | None = None
 
     @property
     def printed_characters(self) -> int:
@@ -273,6 +276,7 @@ def lower(
         metric_check=check,
         scaled=f.kind == "impact" and not plan.moving_walls[f.wall_index or 0],
         scalar=scalar_body,
+        call_stop=_call_stop(f, plan.n, callee),
     )
 
 
@@ -494,5 +498,14 @@ def _scalar_body(
             lines += dialect.lines(program, f.out_shape, exprs)
     if callee is not None:
         args = ", ".join(callee.arguments)
-        lines.append(f"out[{n}:] = _one_{callee.name}({args})")
+        stop = _call_stop(f, n, callee)
+        lines.append(f"out[{n}:{'' if stop is None else stop}] = _one_{callee.name}({args})")
     return tuple(lines)
+
+
+def _call_stop(f: FunctionPlan, n: int, callee: LoweredFunction | None) -> int | None:
+    """The end of the entries ``out[n:]`` that the function ``f`` calls writes, where they
+    are not the tail of ``out`` (``augmented_rhs``: the walls' rates follow v_dot)."""
+    if f.calls is None or callee is None or n + callee.out_size >= f.out_size:
+        return None
+    return n + callee.out_size

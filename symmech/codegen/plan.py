@@ -97,6 +97,7 @@ FUNCTIONS = (
     "forcing",
     "acceleration",
     "rhs",
+    "augmented_rhs",
     "energy",
     "multipliers",
     "dynamics",
@@ -121,7 +122,8 @@ class FunctionPlan:
     ``p`` appear.  The function evaluates ``blocks`` and then either returns the block
     named ``"out"`` (``step is None``) or runs ``step`` on the blocks (``step_args`` are
     the integer sizes it needs), writing ``out_shape`` entries.  ``calls`` names another
-    function whose result fills the tail of ``out`` (``rhs`` calls ``acceleration``);
+    function whose result fills ``out[n : n + its size]`` (``rhs`` and ``augmented_rhs``
+    call ``acceleration``);
     ``part_of`` = (name, offset): the function has no blocks, its ``out`` is entries
     ``offset ...`` of another's (``acceleration`` and ``multipliers`` of ``dynamics``).
     ``wall`` and ``wall_index`` name the wall of a per-wall function (psi, dpsi, psi_t,
@@ -298,9 +300,11 @@ def build_plan(
     takes ``linear_solve`` and says so in ``omitted`` and :attr:`ScenePlan.fallback`;
     ``"closed_form"`` raises :class:`CodegenError` naming the stage and the budget.
     ``functions`` restricts the kinds
-    emitted (names from :data:`FUNCTIONS`; all but ``dynamics`` by default: ``dynamics``,
-    out = (v_dot, lambda) from one solve, is made by :mod:`symmech.codegen.sharing` when
-    acceleration and multipliers are large, or when asked for).  ``constants`` bakes
+    emitted (names from :data:`FUNCTIONS`; all but ``dynamics`` and ``augmented_rhs`` by
+    default: ``dynamics``, out = (v_dot, lambda) from one solve, is made by
+    :mod:`symmech.codegen.sharing` when acceleration and multipliers are large, or when
+    asked for; ``augmented_rhs``, the simulator's right-hand side with the walls' gaps,
+    when asked for).  ``constants`` bakes
     parameter values in (folded into the expressions); the other parameters are run-time
     inputs ``p``.
     ``definitions`` maps arbitrary functions of time (``f`` or ``f(t)``) to expressions in
@@ -329,8 +333,9 @@ def build_plan(
         wanted.add("jacobian")
     elif functions is None:
         wanted.discard("jacobian")
-    if functions is None:  # (made when acceleration and multipliers share their solve)
-        wanted.discard("dynamics")
+    if functions is None:  # (made when acceleration and multipliers share their solve;
+        # the simulator's own right-hand side)
+        wanted -= {"dynamics", "augmented_rhs"}
     options = (wanted, constants or {}, definitions or {}, extra_functions(extra or {}))
     if strategy == "linear_solve" or (strategy == "auto" and scene.n > limits.CLOSED_FORM_MAX_N):
         return _build(scene, "linear_solve", *options)

@@ -137,7 +137,16 @@ class _PythonLoop(Backend):
         jac = fns.flow_jac if self.is_implicit(opts.method) else None
         n = fns.n
         flow = (
-            AugmentedFlow(make, fns.flow_rhs, fns.flow_rates, fns.gaps, 2 * n, jac, fns.augmented)
+            AugmentedFlow(
+                make,
+                fns.flow_rhs,
+                fns.flow_rates,
+                fns.gaps,
+                2 * n,
+                jac,
+                fns.augmented,
+                bind=lambda: fns.augmented_in(fns.mode),
+            )
             if fns.walls
             else make(fns.flow_rhs, jac)
         )

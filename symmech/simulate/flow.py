@@ -114,6 +114,17 @@ class RKFlow:
         self.stats.nfev += 1
         return self.f(t, y)
 
+    def _counted(self) -> Rhs:
+        """:meth:`_rhs` over the right-hand side of now (``f`` may be replaced at a
+        restart): what a step hands its continuous output, formed on first read."""
+        f, stats = self.f, self.stats
+
+        def rhs(t: float, y: np.ndarray) -> np.ndarray:
+            stats.nfev += 1
+            return f(t, y)
+
+        return rhs
+
     def _jac(self, t: float, y: np.ndarray) -> np.ndarray:
         self.stats.njev += 1
         assert self.jac is not None
@@ -122,6 +133,7 @@ class RKFlow:
     def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
         """(Re)start at (t, y), integrating towards ``t_bound``."""
         self.t, self.y, self.t_bound = t, np.array(y, dtype=float), t_bound
+        self._step_rhs = self._counted()
         self.fy = self._rhs(t, self.y)
         if not all_finite(self.fy):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
@@ -162,7 +174,7 @@ class RKFlow:
             if h < left and h <= 8 * eps * max(abs(t), scale):
                 raise FlowFailure(f"step size {h:.3g} too small at t = {t!r}")
             jac = self._jac if self.stepper.implicit else None
-            st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
+            st = self.stepper.step(self._step_rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
             err = st.error
             finite = math.isfinite(err) and all_finite(st.y)
             if not self.stepper.adaptive:
@@ -421,8 +433,13 @@ class AugmentedFlow:
         size: int,
         jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
         augmented: Rhs | None = None,
+        bind: Callable[[], Rhs] | None = None,
     ):
         self.size, self._rhs, self._rates, self._gaps = size, rhs, rates, gaps
+        #: ``bind()``: the augmented right-hand side of the mode the loop integrates now,
+        #: fixed to it, given to the inner flow at every (re)start: a step's continuous
+        #: output formed on first read, after the mode changed, evaluates the step's own
+        self._bind = bind
         #: the nodes of a method's stages -> their order in time
         self._orders: dict[Sequence[float], tuple[list[float], Any]] = {}
         self._jac = jac
@@ -462,6 +479,8 @@ class AugmentedFlow:
         return np.concatenate([y, self._gaps(t, y)])
 
     def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
+        if self._bind is not None:
+            self.inner.f = self._bind()
         self.inner.start(t, self._lift(t, y), t_bound)
 
     def advance(self) -> Segment:

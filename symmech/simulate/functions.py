@@ -84,8 +84,8 @@ class Functions:
         self._bound: dict[tuple[Mode, str], tuple[Callable[..., np.ndarray], bool]] = {}
         self._bound_modules: dict[Mode, BoundModule] = {}
         self._walls: dict[tuple[str, int], str] = {}
-        #: mode -> the fused augmented right-hand side (None: the general path)
-        self._kernels: dict[Mode, Callable[[float, np.ndarray], np.ndarray | None] | None] = {}
+        #: mode -> :meth:`augmented` in that mode (:meth:`augmented_in`)
+        self._fixed: dict[Mode, Callable[[float, np.ndarray], np.ndarray]] = {}
         self._gaps: dict[int, Callable[[float, Any], float]] = {}
         #: (wall, t, the state's bytes) -> normal rate (:meth:`normal_rate`)
         self._rates: dict[tuple[int, float, bytes], float] = {}
@@ -188,23 +188,46 @@ class Functions:
         and :meth:`flow_rates` concatenated, through the direct callers of the rhs and the
         gradients where they exist (one conversion of the state; a failure or a
         non-finite value goes the general way, which gives NaN)."""
-        mode = self.mode
-        kernel = self._kernels.get(mode, _UNSET)
-        if kernel is _UNSET:
-            kernel = self._kernels[mode] = self._augmented_kernel(mode)
-        if kernel is not None:
+        return self.augmented_in(self.mode)(t, ya)
+
+    def augmented_in(self, mode: Mode) -> Callable[[float, np.ndarray], np.ndarray]:
+        """:meth:`augmented` in ``mode``, whatever the current mode becomes: the flow's
+        right-hand side from a (re)start on, which a step's continuous output formed
+        later (on first read) evaluates too."""
+        fixed = self._fixed.get(mode)
+        if fixed is None:
+            fixed = self._fixed[mode] = self._augmented_in(mode)
+        return fixed
+
+    def _augmented_in(self, mode: Mode) -> Callable[[float, np.ndarray], np.ndarray]:
+        kernel = self._augmented_kernel(mode)
+        size = 2 * self.n
+
+        def general(t: float, ya: np.ndarray) -> np.ndarray:
+            y = ya[:size]
+            ydot = self.rhs(mode, t, y)
+            return np.concatenate([ydot, self.flow_rates(t, y, ydot)])
+
+        if kernel is None:
+            return general
+
+        def fused(t: float, ya: np.ndarray) -> np.ndarray:
             out = kernel(t, ya)
-            if out is not None:
-                return out
-        y = ya[: 2 * self.n]
-        ydot = self.flow_rhs(t, y)
-        return np.concatenate([ydot, self.flow_rates(t, y, ydot)])
+            return general(t, ya) if out is None else out
+
+        return fused
 
     def _augmented_kernel(self, mode: Mode) -> Any:
-        """The fused :meth:`augmented` of ``mode`` (None: the general path only): for
+        """The fused :meth:`augmented` of ``mode`` (None: the general path only): in free
+        flight the generated ``augmented_rhs`` where it has a direct caller; else, for
         static walls, whose rate is ``dpsi q_dot``, when the rhs and every gradient have
         direct callers of the same kind."""
-        if self.locked(mode) or any(self.moving):
+        if self.locked(mode):
+            return None
+        fused = self._direct(mode, "augmented_rhs") if mode == FREE else None
+        if fused is not None:
+            return _generated_kernel(*fused, 2 * self.n)
+        if any(self.moving):
             return None
         rhs = self._direct(mode, "rhs")
         grads = [self._direct(FREE, self._wall_name("dpsi", w)) for w in range(self.walls)]
@@ -384,6 +407,26 @@ class Functions:
             return float(self.system.locked_force(mode)(t, q, p)[mode.index(wall)])
         lam = self._call(mode, "multipliers", t, q, v)
         return float(lam[self.system.normal_index(mode, wall)])
+
+
+def _generated_kernel(fn: Callable, over_lists: bool, size: int) -> Callable:
+    """:meth:`Functions.augmented` through a direct caller of ``augmented_rhs`` (over
+    lists of floats, or over arrays): None where the call fails, as the other kernels."""
+    if over_lists:
+
+        def plain(t: float, ya: np.ndarray) -> np.ndarray | None:
+            out = fn(ya.tolist()[:size])
+            return None if out is None else np.array(out)
+
+        return plain
+
+    def arrays(t: float, ya: np.ndarray) -> np.ndarray | None:
+        try:
+            return fn(ya[:size])
+        except NumericalError:
+            return None
+
+    return arrays
 
 
 def _point(

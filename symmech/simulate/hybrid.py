@@ -156,19 +156,7 @@ class _Run:
 
     @mode.setter
     def mode(self, walls: tuple[int, ...]) -> None:
-        mode = tuple(sorted(walls))
-        if mode != self.f.mode:
-            self._form_outputs()
-        self.f.mode = mode
-
-    def _form_outputs(self) -> None:
-        """Form the continuous output of the steps taken in the current mode: a step's
-        output is formed when first read (the event search skips most), from the
-        right-hand side of the mode the loop integrates, which is about to change."""
-        segments = getattr(self, "segments", ())
-        for t0, _, dense in segments[getattr(self, "_formed", 0) :]:
-            dense(t0)
-        self._formed = len(segments)
+        self.f.mode = tuple(sorted(walls))
 
     # -- helpers ----------------------------------------------------------------------------
     def q(self, y: np.ndarray) -> np.ndarray:

@@ -41,6 +41,7 @@ import sympy as sp
 from symmech.codegen import generate
 from symmech.codegen.definitions import defined, definition_rules
 from symmech.codegen.module import SceneModule
+from symmech.codegen.plan import FUNCTIONS
 from symmech.declaration.symbols import t as TIME
 from symmech.errors import SymmechError
 from symmech.scene import Scene
@@ -142,14 +143,19 @@ class HybridSystem:
         if target not in ("c", "numpy"):
             raise SimulationError(f"target must be 'c' or 'numpy', got {target!r}")
         system = cls(scene, target, strategy, dict(definitions or {}), jacobian=jacobian)
-        system.modules[FREE] = system._load(scene)
+        system.modules[FREE] = system._load(scene, fused=True)
         return system
 
-    def _load(self, scene: Scene) -> SceneModule:
+    def _load(self, scene: Scene, fused: bool = False) -> SceneModule:
+        """Generate and load a mode's module: every function but ``dynamics``, with the
+        projectors of a constrained scene, the Jacobian when asked for, and with
+        ``fused`` (free flight) ``augmented_rhs``, the Python loops' right-hand side."""
+        kinds = [k for k in FUNCTIONS if k not in ("dynamics", "projectors", "jacobian")]
         code = generate(
             scene,
             self.target,
             strategy=self.strategy,
+            functions=kinds if fused else None,
             definitions=self.definitions or None,
             projectors=scene.is_constrained,
             jacobian=self.jacobian,
