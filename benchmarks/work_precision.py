@@ -77,6 +77,13 @@ def main(argv: list[str] | None = None) -> int:
                     f" {b.final_error:.1e} ({b.status}) |"
                 )
         best = [r for r in table if r.route == "baseline" and math.isfinite(r.final_error)]
+        crossed = [r for r in best if r.min_gap < -1e-9]
+        if crossed:
+            print(
+                "\nnote: the baseline's finished runs at rtol"
+                f" {', '.join(f'{r.rtol:.0e}' for r in crossed)} crossed the wall (their error"
+                " is the tunnelling's); the equal-error figures below compare against them"
+            )
         if best:
             for route in dict.fromkeys(r.route for r in table if r.route != "baseline"):
                 _equal_error(table, best, route)
