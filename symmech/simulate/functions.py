@@ -22,8 +22,6 @@ from symmech.simulate.system import (
 
 __all__ = ["Functions"]
 
-_UNSET: Any = object()
-
 #: How many normal rates :meth:`Functions.normal_rate` keeps (then it starts afresh).
 _RATES_KEPT = 64
 
@@ -185,9 +183,10 @@ class Functions:
     def augmented(self, t: float, ya: np.ndarray) -> np.ndarray:
         """``(y_dot, d psi_w/dt of every wall)`` in the current :attr:`mode` at ``ya = (y,
         gaps)`` (the right-hand side of :class:`~.flow.AugmentedFlow`): :meth:`flow_rhs`
-        and :meth:`flow_rates` concatenated, through the direct callers of the rhs and the
-        gradients where they exist (one conversion of the state; a failure or a
-        non-finite value goes the general way, which gives NaN)."""
+        and :meth:`flow_rates` concatenated, through the direct caller of the generated
+        ``augmented_rhs`` in free flight, else of the rhs and the gradients, where they
+        exist (one conversion of the state; a failure or a non-finite value goes the
+        general way, which gives NaN)."""
         return self.augmented_in(self.mode)(t, ya)
 
     def augmented_in(self, mode: Mode) -> Callable[[float, np.ndarray], np.ndarray]:
