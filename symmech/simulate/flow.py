@@ -255,6 +255,8 @@ class ScipyFlow:
         self.cls = getattr(integrate, name)
         self._dop853 = integrate.DOP853
         self.implicit = name in ("Radau", "BDF", "LSODA")
+        #: the solver keeps f(t0, y0) as ``f`` (the others compute it inside)
+        self._own_f = name in ("DOP853", "RK45", "RK23", "Radau")
         self.f, self.jac = f, jac
         self.rtol, self.atol, self.max_step = rtol, atol, max_step
         self.stats = FlowStats()
@@ -270,13 +272,17 @@ class ScipyFlow:
         if self.solver is not None:
             self._collect()
         # the loops' rule (RKFlow.start): SciPy's first-step heuristic turns an infinite
-        # rhs into a step of nan, which its step loop then shrinks forever
+        # rhs into a step of nan, which its step loop then shrinks forever; with the first
+        # step given there is no heuristic, and the solver's own f(t, y) is checked
         y = np.array(y, dtype=float)
-        self.stats.nfev += 1
-        if not all_finite(np.asarray(self.f(t, y), dtype=float)):
-            raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
+        if "first_step" not in kwargs or not self._own_f:
+            self.stats.nfev += 1
+            if not all_finite(np.asarray(self.f(t, y), dtype=float)):
+                raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
         self.solver = self.cls(self.f, t, y, t_bound, **kwargs)
         self.t_bound = t_bound
+        if self._own_f and not all_finite(self.solver.f):
+            raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
 
     def _collect(self) -> None:
         s = self.solver
