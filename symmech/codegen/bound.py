@@ -48,10 +48,8 @@ class BoundModule:
             p = np.array(p, dtype=np.float64, order="C")
             p.setflags(write=False)
         self.params: np.ndarray | None = p
-        self._bound = {name: _bind(module, name, p) for name in module.functions}
-        for name, fn in self._bound.items():
-            if not hasattr(type(self), name):
-                setattr(self, name, fn)
+        #: name -> the bound function, made on first use (a run reads a few of them)
+        self._bound: dict[str, Callable[..., np.ndarray]] = {}
 
     def call(
         self,
@@ -63,10 +61,17 @@ class BoundModule:
     ):
         """The generated function ``name`` at the bound parameters (``out``: as
         :meth:`SceneModule.call <symmech.codegen.module.SceneModule.call>`)."""
-        fn = self._bound.get(name)
+        fn = self._function(name)
         if fn is None:
             return self.module.call(name, *state, params=self.params, t=t, inputs=inputs, out=out)
         return fn(*state, t=t, inputs=inputs, out=out)
+
+    def _function(self, name: str) -> Callable[..., np.ndarray] | None:
+        """The bound function ``name`` (None: not generated)."""
+        fn = self._bound.get(name)
+        if fn is None and name in self.module.functions:
+            fn = self._bound[name] = _bind(self.module, name, self.params)
+        return fn
 
     def plain(self, name: str) -> Callable[..., list | None] | None:
         """``name`` at the bound parameters over plain lists of floats, one state (its
@@ -80,14 +85,22 @@ class BoundModule:
         return None if make is None else make(self.params)
 
     def __getattr__(self, name: str):
-        # only reached for a name that is not an attribute: say what there is
+        # only reached for a name that is not an attribute: a generated function (bound
+        # now, then an attribute), or say what there is
         module = self.__dict__.get("module")
         if module is None or name.startswith("_"):
             raise AttributeError(name)
+        fn = self._function(name)
+        if fn is not None:
+            setattr(self, name, fn)
+            return fn
         raise AttributeError(
             f"{name} was not generated for scene {module.code.scene_name!r}"
             f" (functions: {list(module.functions)})"
         )
+
+    def __dir__(self) -> list[str]:
+        return sorted({*super().__dir__(), *self.module.functions})
 
     def __repr__(self) -> str:
         return f"BoundModule({self.module!r}, params={self.params!r})"

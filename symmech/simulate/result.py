@@ -170,8 +170,9 @@ class SimulationResult:
         the scene, its parameter values and the compiled functions (for energy and gaps)."""
         self.scene, self.functions = scene, functions
         self.params = {str(k): float(v) for k, v in params.items()}
-        self.coordinates = tuple(str(c) for c in scene.coordinates)
-        self.velocities = tuple(str(v) for v in scene.velocities)
+        # a Symbol's name is its printed form (the str printer costs microseconds a name)
+        self.coordinates = tuple(_name(c) for c in scene.coordinates)
+        self.velocities = tuple(_name(v) for v in scene.velocities)
         self.wall_names = tuple(functions.wall_names)
 
     def sample(self, ts: Sequence[float] | np.ndarray, *, events: bool = True) -> Samples:
@@ -266,3 +267,9 @@ class SimulationResult:
             f"SimulationResult(status={self.status!r}, t_end={float(self.t[-1]):.6g},"
             f" steps={len(self.t)}, events={len(self.events)}, message={self.message!r})"
         )
+
+
+def _name(symbol: Any) -> str:
+    """The printed name of a coordinate or velocity (``str`` of anything but a plain
+    Symbol)."""
+    return symbol.name if type(symbol).__name__ == "Symbol" else str(symbol)
