@@ -159,3 +159,28 @@ def test_a_single_crossing_is_bisected_to_the_sampled_bracket(monkeypatch):
     assert fast is not None and slow is not None
     assert fast[0] == slow[0] and abs(fast[0] - 0.7) < 1e-12
     assert fast_calls < gap.dense_calls
+
+
+@pytest.mark.parametrize("name", ["DOP853", "RK45", "RK23", "Radau"])
+def test_scipy_output_formed_late_is_the_output_formed_at_once(name):
+    """A SciPy step's continuous output formed after the solver took its next step (from
+    the copy ``_snapshot`` keeps) equals the one formed at once, bit for bit; an implicit
+    solver is not copied (its output is formed at once)."""
+    from scipy import integrate
+
+    from symmech.simulate.flow import _snapshot
+
+    def f(t, y):
+        return np.array([y[1], -np.sin(y[0]), np.cos(t)])
+
+    solver = getattr(integrate, name)(f, 0.0, np.array([1.0, 0.0, 0.0]), 10.0)
+    solver.step()
+    solver.step()
+    copy = _snapshot(solver)
+    if name == "Radau":
+        assert copy is None
+        return
+    now = solver.dense_output()
+    solver.step()
+    ts = np.linspace(now.t_min, now.t_max, 9)
+    assert np.array_equal(copy.dense_output()(ts), now(ts))

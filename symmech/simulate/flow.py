@@ -358,9 +358,11 @@ class ScipyFlow:
 class _LazyDense:
     """SciPy's continuous output of the step a solver has just taken, formed on the first
     call (``self()``): a step whose output is never read (the event search certifies most)
-    skips its extra stages.  ``dense_output`` reads the solver's last step and the stage
-    array it overwrites in the next, so it runs on a shallow copy of the solver that owns
-    copies of its stage arrays: the same operations on the same numbers."""
+    skips its extra stages.  ``dense_output`` of an explicit Runge-Kutta solver reads the
+    last step (:data:`_DENSE_READS`, the class's tableau) and the stage array that the
+    next step overwrites, so it runs on a copy of the solver holding just those, the
+    stages copied: the same operations on the same numbers.  Any other solver (Radau,
+    BDF, LSODA: state of their own) forms its output at once."""
 
     def __init__(self, solver: Any):
         self._dense: Any = None
@@ -368,25 +370,44 @@ class _LazyDense:
         #: ``Segment.stages`` of an explicit Runge-Kutta solver: its nodes ``C`` and the
         #: stages ``K`` (the last row ``f(t1, y1)``); else None
         self.stages: tuple[Sequence[float], np.ndarray] | None = None
-        snapshot = object.__new__(type(solver))  # a shallow copy (copy.copy: 3x slower)
-        snapshot.__dict__.update(solver.__dict__)
-        extended = getattr(solver, "K_extended", None)
-        if extended is not None:  # DOP853: K is the first rows of K_extended
-            snapshot.K_extended = extended.copy()
-            snapshot.K = snapshot.K_extended[: solver.K.shape[0]]
-        elif isinstance(getattr(solver, "K", None), np.ndarray):
-            snapshot.K = solver.K.copy()
-        else:  # a solver with state of its own (Radau, BDF, LSODA): at once
+        self._solver = _snapshot(solver)
+        if self._solver is None:
             self._dense = solver.dense_output()
-        if self._dense is None and isinstance(getattr(solver, "C", None), np.ndarray):
-            self.stages = ((*solver.C.tolist(), 1.0), snapshot.K)
-        self._solver = snapshot
+        else:
+            self.stages = ((*solver.C.tolist(), 1.0), self._solver.K)
 
     def __call__(self) -> Any:
         if self._dense is None:
             self._dense = self._solver.dense_output()
             self._solver = None
         return self._dense
+
+
+#: what SciPy's ``dense_output`` of an explicit Runge-Kutta solver reads of the instance
+#: besides its stages (``OdeSolver.dense_output``, ``RungeKutta._dense_output_impl`` and
+#: ``DOP853._dense_output_impl``; the tableau is the class's)
+_DENSE_READS = ("t_old", "t", "n", "y", "y_old", "f", "fun", "h_previous")
+
+
+def _snapshot(solver: Any) -> Any:
+    """A copy of ``solver`` holding what its ``dense_output`` reads, its stage arrays
+    copied (the next step overwrites them); None for a solver that is not an explicit
+    Runge-Kutta solver with those attributes."""
+    K = getattr(solver, "K", None)
+    state = solver.__dict__
+    if not isinstance(K, np.ndarray) or not isinstance(getattr(solver, "C", None), np.ndarray):
+        return None
+    if any(name not in state for name in _DENSE_READS):
+        return None
+    snapshot = object.__new__(type(solver))
+    snapshot.__dict__.update({name: state[name] for name in _DENSE_READS})
+    extended = state.get("K_extended")
+    if extended is not None:  # DOP853: K is the first rows of K_extended
+        snapshot.K_extended = extended.copy()
+        snapshot.K = snapshot.K_extended[: K.shape[0]]
+    else:
+        snapshot.K = K.copy()
+    return snapshot
 
 
 def _array_head(dense: Any) -> Callable[[float, int], list[float]]:
