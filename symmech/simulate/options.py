@@ -114,8 +114,9 @@ class RunOptions:
         unknown = sorted(k for k in keywords if k not in names)
         if unknown:
             raise SimulationError(f"unknown run options {unknown}; the run options are {names}")
-        base = cls() if options is None else options
-        return dataclasses.replace(base, **keywords) if keywords else base
+        if options is None:
+            return cls(**keywords)  # (checked once: a run builds its options every call)
+        return dataclasses.replace(options, **keywords) if keywords else options
 
     def with_changes(self, **changes: Any) -> RunOptions:
         """A copy with ``changes`` (checked like the constructor's arguments)."""
