@@ -455,7 +455,7 @@ def test_simulator_golden_file(golden):
 
 def test_tableaux_are_printed_exactly():
     """Every coefficient in the C source reads back to the double of c_tableau."""
-    from symmech.simulate.steppers import c_tableau
+    from symmech.simulate.c_tableaux import c_tableau
 
     text = simulator_source(system_for(bouncing_ball(), "c"))["symmech_bouncing_ball_simulator.c"]
     for method in C_METHODS:

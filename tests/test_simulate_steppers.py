@@ -15,11 +15,11 @@ import pytest
 
 from symmech.errors import SymmechError
 from symmech.simulate import tableaux as tb
+from symmech.simulate.c_tableaux import c_tableau
 from symmech.simulate.steppers import (
     METHODS,
     Controller,
     StepperError,
-    c_tableau,
     initial_step,
     stepper,
 )

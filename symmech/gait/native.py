@@ -35,7 +35,8 @@ from symmech.gait.stride_map import (
     no_event_message,
     step_small_message,
 )
-from symmech.simulate.steppers import Dop853, c_tableau
+from symmech.simulate.c_tableaux import c_tableau
+from symmech.simulate.steppers import Dop853
 
 __all__ = ["NativeStride", "stride_library_source"]
 

@@ -36,6 +36,7 @@ from symmech.codegen.backends import environment, templates_used
 from symmech.codegen.build import DEFAULT_FLAGS, compile_library, load_library
 from symmech.codegen.printers import SymmechCPrinter
 from symmech.declaration.symbols import t as TIME
+from symmech.simulate.c_tableaux import c_tableau
 from symmech.simulate.functions import Functions
 from symmech.simulate.hybrid import COND_LIMIT, RESTART_FLOOR, Options
 from symmech.simulate.impulses import MAX_SIMULTANEOUS
@@ -49,7 +50,7 @@ from symmech.simulate.protocol import (
     c_enums,
     slot,
 )
-from symmech.simulate.steppers import ExplicitRK, c_tableau, stepper
+from symmech.simulate.steppers import ExplicitRK, stepper
 from symmech.simulate.system import HybridSystem, Mode, SimulationError
 
 __all__ = [
