@@ -224,21 +224,15 @@ def lower(
     printed = tuple(
         (blk, flat, pr(e), idx) for (blk, flat, idx), e in zip(where, final, strict=True)
     )
-    used_syms: set = set()
-    for e in (*(e for _, e in replacements), *final):
-        used_syms |= e.free_symbols
-    used = {names.table[s] for s in used_syms if s in names.table}
+    used = _used_names(names, (*(e for _, e in replacements), *final))
     unpack = _unpack_entries(names, used)
     layout = _laid_out(f, check, program, printed, dialect)
     read = {k for k, _, _ in unpack} | ({"v"} if layout.reads_v else set())
     if f.callee is not None:
         read |= {"q", "v"}
-    # the arguments p, t, u are taken when the printed code reads them (an unrolled solve
-    # may read fewer than the plan's blocks mention) or the callee does
-    takes_p = any(name in used for name in names.p) or bool(callee and callee.takes_parameters)
-    takes_t = "t" in used or bool(callee and callee.takes_time)
-    takes_u = any(name in used for name in names.u) or bool(callee and callee.takes_inputs)
+    takes_p, takes_t, takes_u = _takes(names, used, callee)
     cost, ops, flops = _cost(f, ops, len(replacements), layout.flops, check, callee)
+    call_stop = _call_stop(f, plan.n, callee)
     scalar_body = None
     if scalar is not None and not (takes_t or takes_u):
         scalar_body = _scalar_body(
@@ -276,8 +270,27 @@ def lower(
         metric_check=check,
         scaled=f.kind == "impact" and not plan.moving_walls[f.wall_index or 0],
         scalar=scalar_body,
-        call_stop=_call_stop(f, plan.n, callee),
+        call_stop=call_stop,
     )
+
+
+def _used_names(names: Names, expressions: Sequence[sp.Expr]) -> set[str]:
+    """The printed names (state entries, p, t, u) that ``expressions`` read."""
+    symbols: set = set()
+    for e in expressions:
+        symbols |= e.free_symbols
+    return {names.table[s] for s in symbols if s in names.table}
+
+
+def _takes(
+    names: Names, used: set[str], callee: LoweredFunction | None
+) -> tuple[bool, bool, bool]:
+    """Whether the function takes p, t and u: when its printed code reads them (an
+    unrolled solve may read fewer than the plan's blocks mention) or its callee does."""
+    takes_p = any(name in used for name in names.p) or bool(callee and callee.takes_parameters)
+    takes_t = "t" in used or bool(callee and callee.takes_time)
+    takes_u = any(name in used for name in names.u) or bool(callee and callee.takes_inputs)
+    return takes_p, takes_t, takes_u
 
 
 Where = list[tuple[str, int, tuple[int, ...]]]
