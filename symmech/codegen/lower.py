@@ -282,9 +282,7 @@ def _used_names(names: Names, expressions: Sequence[sp.Expr]) -> set[str]:
     return {names.table[s] for s in symbols if s in names.table}
 
 
-def _takes(
-    names: Names, used: set[str], callee: LoweredFunction | None
-) -> tuple[bool, bool, bool]:
+def _takes(names: Names, used: set[str], callee: LoweredFunction | None) -> tuple[bool, bool, bool]:
     """Whether the function takes p, t and u: when its printed code reads them (an
     unrolled solve may read fewer than the plan's blocks mention) or its callee does."""
     takes_p = any(name in used for name in names.p) or bool(callee and callee.takes_parameters)

@@ -257,6 +257,9 @@ class ScipyFlow:
         self.implicit = name in ("Radau", "BDF", "LSODA")
         #: the solver keeps f(t0, y0) as ``f`` (the others compute it inside)
         self._own_f = name in ("DOP853", "RK45", "RK23", "Radau")
+        #: the times of an explicit solver's stages (its nodes C, then 1 for f(t1, y1))
+        C = getattr(self.cls, "C", None)
+        self._nodes = (*C.tolist(), 1.0) if isinstance(C, np.ndarray) else None
         self.f, self.jac = f, jac
         self.rtol, self.atol, self.max_step = rtol, atol, max_step
         self.stats = FlowStats()
@@ -317,7 +320,7 @@ class ScipyFlow:
         # solvers), so a restart after a projection keeps growing the step
         # (LSODA exposes none: twice its last step, which it cuts back if need be)
         self.h = getattr(s, "h_abs", None) or 2 * s.step_size or self.h
-        dense = _LazyDense(s)
+        dense = _LazyDense(s, self._nodes)
 
         def continuous(tt: float) -> np.ndarray:
             return dense()(tt)
@@ -328,12 +331,7 @@ class ScipyFlow:
             def many(ts: Sequence[float]) -> np.ndarray:
                 return dense()(np.asarray(ts, dtype=float)).T
 
-            def head(tt: float, m: int) -> list[float]:
-                entries = dense.head
-                if entries is None:
-                    entries = dense.head = _dop853_head(dense()) or _array_head(dense())
-                return entries(tt, m)
-
+            head = _scipy_head(dense)
         return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head, dense.stages)
 
     def limit_step(self, h: float) -> None:
@@ -364,17 +362,17 @@ class _LazyDense:
     stages copied: the same operations on the same numbers.  Any other solver (Radau,
     BDF, LSODA: state of their own) forms its output at once."""
 
-    def __init__(self, solver: Any):
+    def __init__(self, solver: Any, nodes: tuple[float, ...] | None):
         self._dense: Any = None
         self.head: Callable[[float, int], list[float]] | None = None
-        #: ``Segment.stages`` of an explicit Runge-Kutta solver: its nodes ``C`` and the
-        #: stages ``K`` (the last row ``f(t1, y1)``); else None
+        #: ``Segment.stages`` of an explicit Runge-Kutta solver: its ``nodes`` (C, then 1)
+        #: and the stages ``K`` (the last row ``f(t1, y1)``); else None
         self.stages: tuple[Sequence[float], np.ndarray] | None = None
-        self._solver = _snapshot(solver)
-        if self._solver is None:
+        self._solver: Any = None if nodes is None else _snapshot(solver)
+        if nodes is None or self._solver is None:
             self._dense = solver.dense_output()
         else:
-            self.stages = ((*solver.C.tolist(), 1.0), self._solver.K)
+            self.stages = (nodes, self._solver.K)
 
     def __call__(self) -> Any:
         if self._dense is None:
@@ -395,7 +393,7 @@ def _snapshot(solver: Any) -> Any:
     Runge-Kutta solver with those attributes."""
     K = getattr(solver, "K", None)
     state = solver.__dict__
-    if not isinstance(K, np.ndarray) or not isinstance(getattr(solver, "C", None), np.ndarray):
+    if not isinstance(K, np.ndarray):
         return None
     if any(name not in state for name in _DENSE_READS):
         return None
@@ -410,9 +408,18 @@ def _snapshot(solver: Any) -> Any:
     return snapshot
 
 
-def _array_head(dense: Any) -> Callable[[float, int], list[float]]:
+def _scipy_head(dense: _LazyDense) -> Callable[[float, int], list[float]]:
+    """``head(t, m)`` of a SciPy DOP853 step's continuous output (:attr:`Segment.head`),
+    the output formed on the first call: :func:`_dop853_head` (the entries of ``dense(t)``
+    where it reproduces them, else taken from ``dense(t)``)."""
+
     def head(tt: float, m: int) -> list[float]:
-        return dense(tt)[:m].tolist()
+        entries = dense.head
+        if entries is None:
+            formed = dense()
+            entries = _dop853_head(formed) or (lambda t, k: formed(t)[:k].tolist())
+            dense.head = entries
+        return entries(tt, m)
 
     return head
 
