@@ -109,14 +109,12 @@ class RKFlow:
         self.stats = FlowStats()
         self.h: float | None = None
         self._rejected_last = False
-
-    def _rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        self.stats.nfev += 1
-        return self.f(t, y)
+        self._rhs: Rhs = self._counted()
 
     def _counted(self) -> Rhs:
-        """:meth:`_rhs` over the right-hand side of now (``f`` may be replaced at a
-        restart): what a step hands its continuous output, formed on first read."""
+        """``f`` as it is now (the flow's owner may replace it at a restart), its calls
+        counted: the right-hand side of the run from a (re)start on, which a step also
+        hands its continuous output, formed on first read."""
         f, stats = self.f, self.stats
 
         def rhs(t: float, y: np.ndarray) -> np.ndarray:
@@ -133,7 +131,7 @@ class RKFlow:
     def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
         """(Re)start at (t, y), integrating towards ``t_bound``."""
         self.t, self.y, self.t_bound = t, np.array(y, dtype=float), t_bound
-        self._step_rhs = self._counted()
+        self._rhs = self._counted()
         self.fy = self._rhs(t, self.y)
         if not all_finite(self.fy):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
@@ -174,7 +172,7 @@ class RKFlow:
             if h < left and h <= 8 * eps * max(abs(t), scale):
                 raise FlowFailure(f"step size {h:.3g} too small at t = {t!r}")
             jac = self._jac if self.stepper.implicit else None
-            st = self.stepper.step(self._step_rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
+            st = self.stepper.step(self._rhs, t, y, self.fy, h, self.rtol, self.atol, jac=jac)
             err = st.error
             finite = math.isfinite(err) and all_finite(st.y)
             if not self.stepper.adaptive:
