@@ -144,7 +144,6 @@ class _PythonLoop(Backend):
                 fns.gaps,
                 2 * n,
                 jac,
-                fns.augmented,
                 bind=lambda: fns.augmented_in(fns.mode),
             )
             if fns.walls

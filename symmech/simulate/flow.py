@@ -464,19 +464,18 @@ class AugmentedFlow:
         gaps: Callable[[float, np.ndarray], np.ndarray],
         size: int,
         jac: Callable[[float, np.ndarray], np.ndarray] | None = None,
-        augmented: Rhs | None = None,
         bind: Callable[[], Rhs] | None = None,
     ):
         self.size, self._rhs, self._rates, self._gaps = size, rhs, rates, gaps
-        #: ``bind()``: the augmented right-hand side of the mode the loop integrates now,
-        #: fixed to it, given to the inner flow at every (re)start: a step's continuous
-        #: output formed on first read, after the mode changed, evaluates the step's own
+        #: ``bind()``: the same right-hand side fused (Functions.augmented_in), in the mode
+        #: the loop integrates now and fixed to it, given to the inner flow at every
+        #: (re)start: a step's continuous output formed on first read, after the mode
+        #: changed, evaluates the step's own; without it, built here from rhs and rates
         self._bind = bind
         #: the nodes of a method's stages -> their order in time
         self._orders: dict[Sequence[float], tuple[list[float], Any]] = {}
         self._jac = jac
-        # ``augmented``: the same right-hand side fused (Functions.augmented), else built here
-        f = self._augmented if augmented is None else augmented
+        f = self._augmented if bind is None else bind()
         self.inner = make(f, None if jac is None else self._augmented_jac)
 
     @property
