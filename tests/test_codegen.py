@@ -7,6 +7,7 @@ CI (CI=true), where that is a failure (``codegen_support.require_c_compiler``).
 
 from __future__ import annotations
 
+import math
 import re
 import subprocess
 from pathlib import Path
@@ -447,6 +448,28 @@ def test_numpy_solve_refuses_non_finite_inputs_for_one_state_and_a_batch():
         with pytest.raises(codegen.NumericalError, match="not finite"):
             raw((batch, np.ones((3, 2))), p, None, None)
     np.testing.assert_array_equal(raw((np.zeros((1, 2)), np.ones((1, 2))), p, None, None)[0], ok)
+
+
+def test_the_one_state_variant_checks_its_solve_inputs_without_overflow():
+    """The one-state variant of a function with a linear solve refuses an inf or a NaN
+    among the solve's inputs, as the vectorised function does, and accepts finite inputs
+    however large (its single test sums ``x - x``, which cannot overflow)."""
+    import importlib.util
+
+    x, y = sm.coordinates("x y")
+    a = sp.Symbol("a", positive=True)
+    scene = sm.Scene((x, y), metric=[[2, 1], [1, a + 1]], potential=x * y, name="one_nonfinite")
+    mod = codegen.generate(scene, "numpy", strategy="linear_solve").load()
+    spec = importlib.util.spec_from_file_location("one_nonfinite_module", mod.path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    one = module._one_acceleration
+    for bad in (math.inf, -math.inf, math.nan):
+        with pytest.raises(FloatingPointError, match="not finite"):
+            one([1.0, bad], [1.0, 1.0], [0.5])
+    huge = one([1e308, 1e308], [0.0, 0.0], [0.5])  # forcing (-1e308, -1e308): finite
+    want = mod.acceleration(np.array([[1e308, 1e308]]), np.zeros((1, 2)), [0.5])[0]
+    assert huge == want.tolist()
 
 
 @pytest.mark.parametrize("value", [sp.zoo, sp.oo, -sp.oo, sp.nan])

@@ -152,6 +152,15 @@ class ScalarDialect(NumPyDialect):
     def ref(self, r: Ref) -> str:
         return f"{r.array}[{r.index}]" if r.array else r.name
 
+    def finite(self, refs: Sequence[str]) -> list[str]:
+        # x - x is 0 for a finite x and NaN for an inf or a NaN, so one test of the sum of
+        # the differences (which cannot overflow) checks them all, as the C batch does
+        total = " + ".join(f"({r} - {r})" for r in refs)
+        return [
+            f"if not math.isfinite({total}):",
+            '    raise FloatingPointError("an input of a linear solve is not finite")',
+        ]
+
     def positive(self, pivot: str) -> list[str]:
         return [
             f"if not {pivot} > 0.0:",

@@ -378,7 +378,8 @@ def _one_unscaled_impact_rough_wall(q, v, p):
     M0_0 = p_m
     M1_1 = p_m
     M2_2 = p_m*tmp1
-    _require_finite(M0_0, M1_1, M2_2)
+    if not math.isfinite((M0_0 - M0_0) + (M1_1 - M1_1) + (M2_2 - M2_2)):
+        raise FloatingPointError("an input of a linear solve is not finite")
     if not M0_0 > 0.0:
         raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
     if not M1_1 > 0.0:

@@ -257,7 +257,8 @@ def _one_acceleration(q, v, p):
     M5_5 = tmp0
     mu0_4 = -p_r
     mu1_3 = p_r
-    _require_finite(M3_3, M4_4, M5_5, mu1_3, mu0_4)
+    if not math.isfinite((M3_3 - M3_3) + (M4_4 - M4_4) + (M5_5 - M5_5) + (mu1_3 - mu1_3) + (mu0_4 - mu0_4)):
+        raise FloatingPointError("an input of a linear solve is not finite")
     if not M3_3 > 0.0:
         raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
     if not M4_4 > 0.0:
@@ -439,7 +440,8 @@ def _one_multipliers(q, v, p):
     M5_5 = tmp0
     mu0_4 = -p_r
     mu1_3 = p_r
-    _require_finite(M3_3, M4_4, M5_5, mu1_3, mu0_4)
+    if not math.isfinite((M3_3 - M3_3) + (M4_4 - M4_4) + (M5_5 - M5_5) + (mu1_3 - mu1_3) + (mu0_4 - mu0_4)):
+        raise FloatingPointError("an input of a linear solve is not finite")
     if not M3_3 > 0.0:
         raise numpy.linalg.LinAlgError("a matrix that must be positive definite is not")
     if not M4_4 > 0.0:
