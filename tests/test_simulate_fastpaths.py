@@ -131,8 +131,30 @@ def test_head_equals_the_continuous_output_entry_by_entry(make):
         assert seg.head is not None
         for k in range(9):
             t = seg.t0 + (seg.t1 - seg.t0) * k / 8
+            # DOP853's state at one time is itself formed entry by entry on floats: the
+            # array evaluation of many times stands beside it
+            whole = seg.dense(t) if seg.many is None else seg.many(np.array([t]))[0]
             for m in (1, 2, 4):
-                assert seg.head(t, m) == seg.dense(t)[:m].tolist()
+                assert seg.head(t, m) == whole[:m].tolist()
+            assert seg.dense(t).tolist() == whole.tolist()
+
+
+def test_a_long_state_of_dop853_is_formed_on_arrays_with_the_same_values():
+    """Past ``_FLOAT_LOOP_SIZE`` entries the continuous output is evaluated on arrays
+    (cheaper there than entry by entry): the same values as the entry-by-entry form."""
+    from symmech.simulate.steppers import _FLOAT_LOOP_SIZE
+
+    n = 2 * _FLOAT_LOOP_SIZE
+
+    def f(t, y):
+        return np.cos(y + t)
+
+    flow = RKFlow(f, "dop853", 1e-6, 1e-8, np.inf)
+    flow.start(0.0, np.linspace(0.0, 1.0, n), 2.0)
+    seg = flow.advance()
+    for k in range(9):
+        t = seg.t0 + (seg.t1 - seg.t0) * k / 8
+        assert seg.dense(t).tolist() == seg.head(t, n)
 
 
 def test_scipy_rk45_has_no_head():

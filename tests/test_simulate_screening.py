@@ -1,9 +1,10 @@
-"""The event search's stage certificate (``StepSearch._first_sample``): a step whose gaps'
+"""The event search's stage certificate (``StepSearch._screened_end``): a step whose gaps'
 rates at the stages never turn from negative to positive is not sampled where no gap
-ends below zero, and is bisected over the samples where one does.
+ends below zero, and is bisected over the samples where one does
+(``StepSearch._first_negative``).
 
 Checked three ways: the whole runs are the same, bit for bit, as the search that samples
-every step (a monkeypatched ``_first_sample``) on the built-in cases and all four Python
+every step (a monkeypatched ``_screened_end``) on the built-in cases and all four Python
 routes; a gap that dips below zero between two positive step ends (rates turning) is
 still found; and a certified step never forms its continuous output."""
 
@@ -54,21 +55,27 @@ def test_certified_runs_equal_the_fully_sampled_runs(monkeypatch, backend, metho
         "ladder",
     )
     certified = {}
-    calls = []
-    original = StepSearch._first_sample
+    ends, firsts = [], []
+    screened_end, first_negative = StepSearch._screened_end, StepSearch._first_negative
 
-    def spy(self, times, at):
-        out = original(self, times, at)
-        calls.append(out)
+    def spy_end(self):
+        out = screened_end(self)
+        ends.append(out)
         return out
 
-    monkeypatch.setattr(StepSearch, "_first_sample", spy)
+    def spy_first(end, at, last):
+        out = first_negative(end, at, last)
+        firsts.append(out)
+        return out
+
+    monkeypatch.setattr(StepSearch, "_screened_end", spy_end)
+    monkeypatch.setattr(StepSearch, "_first_negative", staticmethod(spy_first))
     for name in names:
         for rtol in (1e-3, 1e-8):
             certified[name, rtol] = _run(name, backend, method, rtol)
     # the certificate was used: steps skipped, and steps bisected to a later sample
-    assert None in calls and any(c is not None and c > 1 for c in calls)
-    monkeypatch.setattr(StepSearch, "_first_sample", lambda self, times, at: 1)
+    assert any(e is not None and min(e) >= 0 for e in ends) and max(firsts) > 1
+    monkeypatch.setattr(StepSearch, "_screened_end", lambda self: None)
     for (name, rtol), fast in certified.items():
         slow = _run(name, backend, method, rtol)
         assert fast[0] == slow[0], (name, rtol)
@@ -154,7 +161,7 @@ def test_a_single_crossing_is_bisected_to_the_sampled_bracket(monkeypatch):
     gap = _Gap(lambda t: 0.49 - t * t, lambda t: -2 * t)
     fast = StepSearch(gap.run(), gap.segment()).earliest()
     fast_calls = gap.dense_calls
-    monkeypatch.setattr(detection.StepSearch, "_first_sample", lambda self, times, at: 1)
+    monkeypatch.setattr(detection.StepSearch, "_screened_end", lambda self: None)
     slow = StepSearch(gap.run(), gap.segment()).earliest()
     assert fast is not None and slow is not None
     assert fast[0] == slow[0] and abs(fast[0] - 0.7) < 1e-12

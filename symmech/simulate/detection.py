@@ -18,7 +18,7 @@ Where the flow gives the gaps' rates at the stages of the step (``seg.gap_rates`
 walls' columns of the stages of an :class:`~symmech.simulate.flow.AugmentedFlow`), a step
 whose rates never turn from negative to positive holds no minimum of a gap: it is not
 searched when every gap ends at or above zero, and where one ends below, its first negative
-sample is found by bisection and the search looks there (:meth:`StepSearch._first_sample`).
+sample is found by bisection and the search looks there (:meth:`StepSearch._screened_end`).
 The bracket is the one the sampled search finds, so the event is the same, bit for bit;
 the step's continuous output is formed only where it is read.
 
@@ -65,7 +65,7 @@ class StepSearch:
         self.start: list[Any] = []
         self.band: list[bool] = []
         #: per event function: whether the stage rates may stand in for its samples
-        #: (:meth:`_first_sample`)
+        #: (:meth:`_screened_end`)
         self.screenable: list[bool] = []
         #: per event function: whether it is a contact force (a force's sign change is
         #: ``g > 0 -> g <= 0``, a gap's ``g >= 0 -> g < 0``), and its evaluation at (t, y)
@@ -142,6 +142,9 @@ class StepSearch:
         if not self.funcs:
             return None
         seg = self.seg
+        end = self._screened_end()
+        if end is not None and all(g >= 0 or g != g for g in end):
+            return None  # no minimum inside and no sign change at t1 (NaN: none either)
         t0, K = seg.t0, self.run.o.samples
         times = [t0] + [t0 + (seg.t1 - t0) * k / K for k in range(1, K)] + [seg.t1]
         # on a step a few ulps long the samples round onto each other: keep distinct times
@@ -158,9 +161,10 @@ class StepSearch:
                 out = known[k] = [g(tk, yk) for g in evals]
             return out
 
-        first = self._first_sample(times, at)
-        if first is None:
-            return None
+        first = 1
+        if end is not None and len(times) >= 3:
+            known[len(times) - 1] = end  # the last sample is t1, its values the same
+            first = self._first_negative(end, at, len(times) - 1)
         vals = [start]
         for k in range(1, len(times)):
             # samples before first - 2 are never read by _brackets from ``first`` on
@@ -171,30 +175,38 @@ class StepSearch:
                     return self._locate(brackets)
         return None
 
-    def _first_sample(self, times: list, at: Callable[[int], list[Any]]) -> int | None:
-        """The first sample at which the search must look for a bracket (1: every
-        sample), or None when the step holds no event, as the rates of the walls' gaps at
-        the stages of the step show (``seg.gap_rates``, where the flow has them).
+    def _screened_end(self) -> list[Any] | None:
+        """The event functions at t1 where the rates of the walls' gaps at the stages of
+        the step (``seg.gap_rates``, where the flow has them) show that no gap has a
+        minimum inside the step; None where the step is to be searched sample by sample
+        (a rate that turns from negative to positive, a contact force, a banded, grazed or
+        entered wall, no stages).
 
         Where no gap's rate turns from negative to positive at the stages (taken in the
-        order of their times), no gap has a minimum inside the step: each is largest
-        inside or monotone, so its least value is at an end, and a gap left by the step
-        (psi(t0) >= 0 and psi(t1) >= 0, or leaving a wall at t0) has no event in it.  A
-        gap below zero at t1 then crosses zero once: its first negative sample is found
-        by bisection over the samples (a few evaluations where the sampled search takes
-        up to ``samples``), and the search looks there, with the samples it reads
-        evaluated as it would.  Any other step (a rate that turns, a contact force, a
-        banded, grazed or entered wall, no stages) is searched sample by sample."""
+        order of their times), each gap is largest inside or monotone, so its least value
+        is at an end: a gap left by the step (psi(t0) >= 0 and psi(t1) >= 0, or leaving a
+        wall at t0) has no event in it, and one below zero at t1 crosses zero once
+        (:meth:`_first_negative`)."""
         rates = self.seg.gap_rates
-        if rates is None or len(times) < 3 or not all(self.screenable):
-            return 1
+        if rates is None or not all(self.screenable):
+            return None
         per_wall = rates[1]
         if not all(_no_minimum(per_wall[w]) for w, _ in self.funcs):
-            return 1
-        last = len(times) - 1
-        first = None
-        for i, g in enumerate(at(last)):
-            if g >= 0 or g != g:  # no sign change at t1 (NaN: none either)
+            return None
+        seg = self.seg
+        return [self.value(i, seg.t1, seg.y1) for i in range(len(self.funcs))]
+
+    @staticmethod
+    def _first_negative(end: list[Any], at: Callable[[int], list[Any]], last: int) -> int:
+        """The first sample at which the search must look for a bracket, on a step
+        screened by :meth:`_screened_end` with an event function below zero at t1 (sample
+        ``last``, values ``end``): the first negative sample of each such function, found
+        by bisection over the samples (a few evaluations where the sampled search takes up
+        to ``samples``); the search looks from there, with the samples it reads evaluated
+        as it would."""
+        first = last
+        for i, g in enumerate(end):
+            if g >= 0 or g != g:  # no sign change at t1
                 continue
             lo, hi = 0, last  # f(lo) >= 0 > f(hi)
             while hi - lo > 1:
@@ -203,7 +215,7 @@ class StepSearch:
                     hi = mid
                 else:
                     lo = mid
-            first = hi if first is None else min(first, hi)
+            first = min(first, hi)
         return first
 
     def _sampled(self, times: list) -> tuple[Any, list[Any]]:

@@ -199,7 +199,6 @@ class Functions:
         return fixed
 
     def _augmented_in(self, mode: Mode) -> Callable[[float, np.ndarray], np.ndarray]:
-        kernel = self._augmented_kernel(mode)
         size = 2 * self.n
 
         def general(t: float, ya: np.ndarray) -> np.ndarray:
@@ -207,6 +206,12 @@ class Functions:
             ydot = self.rhs(mode, t, y)
             return np.concatenate([ydot, self.flow_rates(t, y, ydot)])
 
+        if self.locked(mode):
+            return general
+        generated = self._direct(mode, "augmented_rhs") if mode == FREE else None
+        if generated is not None:  # the hot path of free flight: one layer, no more
+            return _generated_kernel(*generated, size, general)
+        kernel = self._augmented_kernel(mode)
         if kernel is None:
             return general
 
@@ -217,15 +222,9 @@ class Functions:
         return fused
 
     def _augmented_kernel(self, mode: Mode) -> Any:
-        """The fused :meth:`augmented` of ``mode`` (None: the general path only): in free
-        flight the generated ``augmented_rhs`` where it has a direct caller; else, for
-        static walls, whose rate is ``dpsi q_dot``, when the rhs and every gradient have
-        direct callers of the same kind."""
-        if self.locked(mode):
-            return None
-        fused = self._direct(mode, "augmented_rhs") if mode == FREE else None
-        if fused is not None:
-            return _generated_kernel(*fused, 2 * self.n)
+        """The fused :meth:`augmented` of ``mode`` from the rhs and the gradients (None:
+        the general path only): for static walls, whose rate is ``dpsi q_dot``, when the
+        rhs and every gradient have direct callers of the same kind."""
         if any(self.moving):
             return None
         rhs = self._direct(mode, "rhs")
@@ -408,22 +407,25 @@ class Functions:
         return float(lam[self.system.normal_index(mode, wall)])
 
 
-def _generated_kernel(fn: Callable, over_lists: bool, size: int) -> Callable:
+def _generated_kernel(
+    fn: Callable, over_lists: bool, size: int, general: Callable[[float, np.ndarray], np.ndarray]
+) -> Callable[[float, np.ndarray], np.ndarray]:
     """:meth:`Functions.augmented` through a direct caller of ``augmented_rhs`` (over
-    lists of floats, or over arrays): None where the call fails, as the other kernels."""
+    lists of floats, or over arrays); ``general`` where the call fails (it explains, or
+    returns NaN for a trial stage far outside the solution)."""
     if over_lists:
 
-        def plain(t: float, ya: np.ndarray) -> np.ndarray | None:
+        def plain(t: float, ya: np.ndarray) -> np.ndarray:
             out = fn(ya.tolist()[:size])
-            return None if out is None else np.array(out)
+            return general(t, ya) if out is None else np.array(out)
 
         return plain
 
-    def arrays(t: float, ya: np.ndarray) -> np.ndarray | None:
+    def arrays(t: float, ya: np.ndarray) -> np.ndarray:
         try:
             return fn(ya[:size])
         except NumericalError:
-            return None
+            return general(t, ya)
 
     return arrays
 

@@ -245,6 +245,11 @@ class _HermiteDense:
         return h00 * self._y0 + h10 * self._hf0 + h01 * self._y1 + h11 * self._hf1
 
 
+#: Up to this many entries, a state of a dense output evaluated entry by entry on floats
+#: (:meth:`_Dop853Dense.head`) is cheaper than the same operations on arrays.
+_FLOAT_LOOP_SIZE = 32
+
+
 class _Dop853Dense:
     """DOP853's 7th-order dense output (HNW I, section II.10; the routine CONTD8).
 
@@ -280,6 +285,8 @@ class _Dop853Dense:
         return F
 
     def __call__(self, theta: float) -> np.ndarray:
+        if isinstance(theta, float) and self._y0.size <= _FLOAT_LOOP_SIZE:
+            return np.array(self._entries(theta, self._y0.size))  # the same operations
         if self._F is None:
             self._F = self._build()
         F, s, s1 = self._F, theta, 1 - theta
@@ -302,6 +309,8 @@ class _Dop853Dense:
             y0 + s * (f0 + s1 * (f1 + s * (f2 + s1 * (f3 + s * (f4 + s1 * (f5 + s * f6))))))
             for f0, f1, f2, f3, f4, f5, f6, y0 in self._columns[:m]
         ]
+
+    _entries = head  # what __call__ reads (a test takes ``head`` away from the searches)
 
     def many(self, thetas: np.ndarray) -> np.ndarray:
         """``self(theta)`` for each theta, as the rows of an array (the same operations)."""
