@@ -140,11 +140,11 @@ def test_head_equals_the_continuous_output_entry_by_entry(make):
 
 
 def test_a_long_state_of_dop853_is_formed_on_arrays_with_the_same_values():
-    """Past ``_FLOAT_LOOP_SIZE`` entries the continuous output is evaluated on arrays
+    """Past ``FLOAT_LOOP_SIZE`` entries the continuous output is evaluated on arrays
     (cheaper there than entry by entry): the same values as the entry-by-entry form."""
-    from symmech.simulate.steppers import _FLOAT_LOOP_SIZE
+    from symmech.simulate.steppers import FLOAT_LOOP_SIZE
 
-    n = 2 * _FLOAT_LOOP_SIZE
+    n = 2 * FLOAT_LOOP_SIZE
 
     def f(t, y):
         return np.cos(y + t)

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from symmech.simulate.steppers import all_finite
+from symmech.simulate.steppers import FLOAT_LOOP_SIZE, all_finite
 
 __all__ = ["AugmentedFlow", "FlowFailure", "RKFlow", "ScipyFlow", "Segment"]
 
@@ -330,6 +330,14 @@ class ScipyFlow:
                 return dense()(np.asarray(ts, dtype=float)).T
 
             head = _scipy_head(dense)
+            if head is not None and s.n <= FLOAT_LOOP_SIZE:  # one time: on floats
+                whole, size = head, s.n
+
+                def continuous(tt: float) -> np.ndarray:
+                    if isinstance(tt, float):
+                        return np.array(whole(tt, size))
+                    return dense()(tt)
+
         return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head, dense.stages)
 
     def limit_step(self, h: float) -> None:

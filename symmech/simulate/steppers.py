@@ -39,6 +39,7 @@ from ..errors import SymmechError
 from .tableaux import DOP853, DOP853_EXTRAS, RK4, RK45, TSIT5, ExplicitTableau
 
 __all__ = [
+    "FLOAT_LOOP_SIZE",
     "METHODS",
     "Controller",
     "Dense",
@@ -245,9 +246,10 @@ class _HermiteDense:
         return h00 * self._y0 + h10 * self._hf0 + h01 * self._y1 + h11 * self._hf1
 
 
-#: Up to this many entries, a state of a dense output evaluated entry by entry on floats
-#: (:meth:`_Dop853Dense.head`) is cheaper than the same operations on arrays.
-_FLOAT_LOOP_SIZE = 32
+#: Up to this many entries, a state of a DOP853 continuous output evaluated entry by entry
+#: on floats (:meth:`_Dop853Dense.head`, and SciPy's by ``flow._dop853_head``) is cheaper
+#: than the same operations on arrays.
+FLOAT_LOOP_SIZE = 32
 
 
 class _Dop853Dense:
@@ -285,7 +287,7 @@ class _Dop853Dense:
         return F
 
     def __call__(self, theta: float) -> np.ndarray:
-        if isinstance(theta, float) and self._y0.size <= _FLOAT_LOOP_SIZE:
+        if isinstance(theta, float) and self._y0.size <= FLOAT_LOOP_SIZE:
             return np.array(self._entries(theta, self._y0.size))  # the same operations
         if self._F is None:
             self._F = self._build()
