@@ -391,6 +391,8 @@ class _LazyDense:
 #: besides its stages (``OdeSolver.dense_output``, ``RungeKutta._dense_output_impl`` and
 #: ``DOP853._dense_output_impl``; the tableau is the class's)
 _DENSE_READS = ("t_old", "t", "n", "y", "y_old", "f", "fun", "h_previous")
+_DENSE_NAMES = frozenset(_DENSE_READS)
+_read_dense = itemgetter(*_DENSE_READS)
 
 
 def _snapshot(solver: Any) -> Any:
@@ -401,10 +403,10 @@ def _snapshot(solver: Any) -> Any:
     state = solver.__dict__
     if not isinstance(K, np.ndarray):
         return None
-    if any(name not in state for name in _DENSE_READS):
+    if not state.keys() >= _DENSE_NAMES:
         return None
     snapshot = object.__new__(type(solver))
-    snapshot.__dict__.update({name: state[name] for name in _DENSE_READS})
+    snapshot.__dict__.update(zip(_DENSE_READS, _read_dense(state), strict=True))
     extended = state.get("K_extended")
     if extended is not None:  # DOP853: K is the first rows of K_extended
         snapshot.K_extended = extended.copy()

@@ -68,7 +68,7 @@ def simultaneous_group(run: Any) -> list[tuple[int, float]]:
     resolves them together: two or more (or one, while walls are held: it is resolved
     with them), each with a Newton direction, the held walls too, at most
     MAX_SIMULTANEOUS in all; else empty (one wall at a time)."""
-    if run.o.impact_law != "simultaneous":
+    if run.o.impact_law != "simultaneous" or run.walls < 2:  # a group needs two walls
         return []
     group = run.approaching_walls()
     size = len(group) + len(run.mode)
