@@ -70,11 +70,18 @@ class StepSearch:
         #: per event function: whether it is a contact force (a force's sign change is
         #: ``g > 0 -> g <= 0``, a gap's ``g >= 0 -> g < 0``), and its evaluation at (t, y)
         self.force = [what == "release" for _, what in self.funcs]
-        self.evals: list[Any] = []
         self.gaps = [self.f.gap_function(w) if what == "wall" else None for w, what in self.funcs]
         for (w, what), gap in zip(self.funcs, self.gaps, strict=True):
             self._prepare(w, what, gap)
-            self.evals.append(self._evaluation(len(self.evals)))
+        self._evals: list[Any] | None = None
+
+    @property
+    def evals(self) -> list[Any]:
+        """Per event function, its evaluation at (t, y) (:meth:`_evaluation`; made on
+        first use: a screened step has no use for them)."""
+        if self._evals is None:
+            self._evals = [self._evaluation(i) for i in range(len(self.funcs))]
+        return self._evals
 
     def _prepare(self, w: int, what: str, gap: Any) -> None:
         """The search rule of event function ``(w, what)`` and its value at t0 (None: to be
@@ -193,8 +200,9 @@ class StepSearch:
         per_wall = rates[1]
         if not all(_no_minimum(per_wall[w]) for w, _ in self.funcs):
             return None
-        seg = self.seg
-        return [self.value(i, seg.t1, seg.y1) for i in range(len(self.funcs))]
+        seg, n = self.seg, self.run.n
+        q1 = seg.y1[:n]  # every function is a gap: the values of :attr:`evals` at t1
+        return [self._gap_rule(i)(seg.t1, q1) for i in range(len(self.funcs))]
 
     @staticmethod
     def _first_negative(end: list[Any], at: Callable[[int], list[Any]], last: int) -> int:

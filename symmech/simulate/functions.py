@@ -461,6 +461,25 @@ def _point(
 
         return call1
 
+    if len(shapes) == 2:  # (q, v): unrolled as well
+        first, second = shapes
+
+        def call2(a: np.ndarray, b: np.ndarray) -> Any:
+            if (
+                type(a) is np.ndarray
+                and type(b) is np.ndarray
+                and a.shape == first
+                and b.shape == second
+                and a.dtype.char == "d"
+                and b.dtype.char == "d"
+            ):
+                out = plain(a.tolist(), b.tolist())
+                if out is not None:
+                    return output(out)
+            return general(a, b)
+
+        return call2
+
     def call(*state: np.ndarray) -> Any:
         if len(state) == len(shapes):
             lists = []
