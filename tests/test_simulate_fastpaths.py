@@ -14,9 +14,10 @@ from codegen_support import require_c_compiler
 
 import symmech as sm
 from symmech.examples import carnot_3_7, pendulum_on_cart
-from symmech.simulate.flow import RKFlow, ScipyFlow
+from symmech.simulate.flow import RKFlow
 from symmech.simulate.functions import Functions
 from symmech.simulate.run import system_for
+from symmech.simulate.scipy_flow import ScipyFlow
 from symmech.simulate.steppers import stepper
 
 PARAMS = {"R": 1.0, "alpha": 0.5, "k": 1.0, "m": 2.0, "g": 9.81}
@@ -199,7 +200,7 @@ def test_searches_on_the_coordinates_give_the_same_run(monkeypatch, backend, met
     through the whole state)."""
     import symmech.simulate as simulate
     from symmech.bench.cases import CASES
-    from symmech.simulate import flow, steppers
+    from symmech.simulate import scipy_flow, steppers
 
     if backend == "scipy":
         require_c_compiler()
@@ -224,7 +225,7 @@ def test_searches_on_the_coordinates_give_the_same_run(monkeypatch, backend, met
 
     fast = runs()
     monkeypatch.delattr(steppers._Dop853Dense, "head")
-    monkeypatch.setattr(flow, "_scipy_head", lambda dense: None)
+    monkeypatch.setattr(scipy_flow, "_scipy_head", lambda dense: None)
     slow = runs()
     for a, b in zip(fast, slow, strict=True):
         for x, y in zip(a[:3], b[:3], strict=True):

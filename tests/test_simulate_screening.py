@@ -175,7 +175,7 @@ def test_scipy_output_formed_late_is_the_output_formed_at_once(name):
     solver is not copied (its output is formed at once)."""
     from scipy import integrate
 
-    from symmech.simulate.flow import _snapshot
+    from symmech.simulate.scipy_flow import _snapshot
 
     def f(t, y):
         return np.array([y[1], -np.sin(y[0]), np.cos(t)])

@@ -5,8 +5,8 @@ backends of :mod:`.backend`, with the options of :mod:`.options`; the package
 itself is callable, so ``symmech.simulate(scene, ...)`` is that function;
 ``simulate_batch`` runs many in one call of the generated C loop (:mod:`.batch`).  The
 loop itself is described in :mod:`.hybrid`, event location in :mod:`.events`, the
-integrators in :mod:`.steppers` and :mod:`.flow`, the compiled functions (free flight and
-contact modes) in :mod:`.system`.
+integrators in :mod:`.steppers`, :mod:`.flow` and :mod:`.scipy_flow`, the compiled
+functions (free flight and contact modes) in :mod:`.system`.
 """
 
 import sys

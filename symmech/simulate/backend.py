@@ -29,11 +29,12 @@ from typing import Any
 import numpy as np
 
 from symmech.simulate.csim import C_METHODS
-from symmech.simulate.flow import AugmentedFlow, RKFlow, ScipyFlow
+from symmech.simulate.flow import AugmentedFlow, RKFlow
 from symmech.simulate.functions import Functions
 from symmech.simulate.hybrid import run
 from symmech.simulate.options import RunOptions
 from symmech.simulate.result import SimulationResult
+from symmech.simulate.scipy_flow import ScipyFlow
 from symmech.simulate.steppers import METHODS as STEPPER_METHODS
 from symmech.simulate.system import HybridSystem, SimulationError
 

@@ -247,8 +247,8 @@ class _HermiteDense:
 
 
 #: Up to this many entries, a state of a DOP853 continuous output evaluated entry by entry
-#: on floats (:meth:`_Dop853Dense.head`, and SciPy's by ``flow._dop853_head``) is cheaper
-#: than the same operations on arrays.
+#: on floats (:meth:`_Dop853Dense.head`, and SciPy's by ``scipy_flow._dop853_head``) is
+#: cheaper than the same operations on arrays.
 FLOAT_LOOP_SIZE = 32
 
 
