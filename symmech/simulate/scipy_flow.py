@@ -58,6 +58,10 @@ class ScipyFlow:
         self.stats = FlowStats()
         self.h: float | None = None
         self.solver: Any = None
+        #: an explicit Runge-Kutta solver is restarted in place (:func:`_restart`)
+        self._restartable = name in ("DOP853", "RK45", "RK23")
+        #: the right-hand side the current solver was built with
+        self._built_with: Rhs | None = None
 
     def start(self, t: float, y: np.ndarray, t_bound: float) -> None:
         kwargs: dict[str, Any] = {"rtol": self.rtol, "atol": self.atol, "max_step": self.max_step}
@@ -75,7 +79,10 @@ class ScipyFlow:
             self.stats.nfev += 1
             if not all_finite(np.asarray(self.f(t, y), dtype=float)):
                 raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
-        self.solver = self.cls(self.f, t, y, t_bound, **kwargs)
+        reuse = self._restartable and self._built_with is self.f and "first_step" in kwargs
+        if not (reuse and _restart(self.solver, t, y, t_bound, kwargs["first_step"])):
+            self.solver = self.cls(self.f, t, y, t_bound, **kwargs)
+            self._built_with = self.f
         self.t_bound = t_bound
         if self._own_f and not all_finite(self.solver.f):
             raise FlowFailure(f"the right-hand side is not finite at t = {t!r}")
@@ -152,6 +159,41 @@ class ScipyFlow:
         if np.max(np.abs(y - self.solver.y) / scale) < 1:
             return
         self.start(float(self.solver.t), y, self.t_bound)
+
+
+#: The instance state of SciPy's explicit Runge-Kutta solvers (``OdeSolver.__init__`` and
+#: ``RungeKutta.__init__``; DOP853 adds ``K_extended``): what :func:`_restart` sets, and
+#: what it keeps (the function and its wrappers, the tolerances and the step bound, the
+#: counters, the stage arrays that every step writes before it reads them).
+_RESET = frozenset(
+    ("t_old", "t", "y", "t_bound", "direction", "status", "y_old", "f", "h_abs", "h_previous")
+)
+_KEPT = frozenset(
+    {"_fun", "fun", "fun_single", "fun_vectorized", "vectorized", "n", "nfev", "njev", "nlu"}
+    | {"max_step", "rtol", "atol", "error_exponent", "K", "K_extended"}
+)
+
+
+def _restart(solver: Any, t: float, y: np.ndarray, t_bound: float, first_step: float) -> bool:
+    """Restart SciPy's explicit Runge-Kutta ``solver`` in place at ``(t, y)`` towards
+    ``t_bound`` with the first step ``first_step``: the state its constructor gives for
+    the same function, tolerances and step bound (``t_old = y_old = h_previous = None``,
+    ``direction``, ``status = "running"``, ``h_abs = first_step``, ``f = fun(t, y)``),
+    without the checks it made at construction.  False, with nothing changed, for a
+    solver holding state this does not know (another SciPy), or a first step that the
+    constructor refuses (it then says why)."""
+    state = vars(solver).keys()
+    if not (_RESET <= state and state <= _RESET | _KEPT):
+        return False
+    if not 0 < first_step <= abs(t_bound - t):
+        return False
+    solver.t_old, solver.t, solver.y, solver.t_bound = None, t, y, t_bound
+    solver.direction = np.sign(t_bound - t) if t_bound != t else 1
+    solver.status = "running"
+    solver.y_old = solver.h_previous = None
+    solver.h_abs = first_step
+    solver.f = solver.fun(t, y)
+    return True
 
 
 class _LazyDense:
