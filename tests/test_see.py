@@ -208,6 +208,35 @@ def test_a_drawing_uses_only_the_scenes_symbols():
     assert scene.drawing == Drawing([Disc((x, y), r, y / r)])
 
 
+@pytest.mark.parametrize(
+    "bad",
+    [
+        lambda x, y: sp.Derivative(sp.Function("h")(x), x),  # a derivative
+        lambda x, y: x + sp.I * y,  # not real
+        lambda x, y: 2 * sp.Function("h")(x),  # an undefined function
+        lambda x, y: sp.cos(x) * (1 + sp.sqrt(-1) * y) ** 2,  # I deep inside
+    ],
+    ids=["derivative", "imaginary", "undefined function", "deep imaginary"],
+)
+def test_a_drawing_is_a_real_function_of_the_scene(bad):
+    """Each shape's expressions are real functions of q, t and the parameters: a shape
+    holding a derivative, the imaginary unit or an undefined function is refused, named
+    by its place, even when the shapes before it share its subexpressions."""
+    x, y = sm.coordinates("x y")
+    m, r = sp.symbols("m r", positive=True)
+    shared = sp.sin(x) + y
+    with pytest.raises(sm.SceneError, match=r"drawing\[2\] \(disc\): .* is not a real function"):
+        sm.Scene(
+            (x, y),
+            metric=sp.diag(m, m),
+            drawing=[
+                Point((shared, y)),
+                Segment((shared, 0), (x, y)),
+                Disc((shared, bad(x, y)), r),
+            ],
+        )
+
+
 def test_scene_files_read_and_write_the_drawing():
     sf = sm.read_scene("ellipse_gravity")
     text = sm.dump_scene(sf.scene, defaults=sf.defaults)

@@ -34,6 +34,7 @@ from typing import Any
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from symmech.algebra.walk import atoms, free_symbols
 from symmech.declaration.shapes import Plane
 from symmech.errors import SceneError
 
@@ -180,6 +181,10 @@ class Drawing:
         return set().union(*(e.free_symbols for e in self.expressions()))
 
 
+#: what makes a drawing's expression other than a real function of q, t and the parameters
+_NOT_REAL = (sp.Derivative, sp.core.numbers.ImaginaryUnit, AppliedUndef)
+
+
 def check_drawing(
     drawing: object, allowed: Sequence[sp.Symbol], problems: list[str]
 ) -> Drawing | None:
@@ -195,16 +200,17 @@ def check_drawing(
             problems.append(str(exc))
             return None
     names = set(allowed)
+    memo: dict[sp.Basic, frozenset] = {}  # the shapes share subexpressions: walked once
     for k, s in enumerate(drawing.shapes):
         for e in _expressions(s):
-            stray = sorted(map(str, e.free_symbols - names))
+            stray = sorted(map(str, free_symbols(e, memo) - names))
             if stray:
                 problems.append(
                     f"drawing[{k}] ({type(s).__name__.lower()}): {', '.join(stray)} is not a"
                     " coordinate, a parameter or t of the scene"
                 )
                 break
-            if e.has(sp.Derivative, sp.I) or e.atoms(AppliedUndef):
+            if atoms(e, _NOT_REAL):
                 problems.append(
                     f"drawing[{k}] ({type(s).__name__.lower()}): {e} is not a real function"
                     " of q, t and the parameters"
