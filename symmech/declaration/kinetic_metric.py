@@ -27,6 +27,7 @@ from fractions import Fraction
 import sympy as sp
 
 from symmech.algebra.canonical import add, mul
+from symmech.algebra.walk import free_symbols
 from symmech.algebra.zero import is_zero
 
 __all__ = [
@@ -155,21 +156,26 @@ def _hessian(expr: sp.Expr, index: dict[sp.Symbol, int], out: dict, coef: _Term)
     raise NotQuadraticError(expr, "has a part that does not depend on the velocities")
 
 
-def group_by_factor(terms: Sequence[_Term], q: frozenset) -> sp.Expr:
-    """Sum ``terms``, grouping them by their coordinate-dependent factors.
+def group_by_factor(
+    terms: Sequence[_Term], q: frozenset, depends: dict[sp.Expr, bool] | None = None
+) -> sp.Expr:
+    """Sum ``terms``, grouping them by their coordinate-dependent factors (``depends``:
+    factor -> whether it reads ``q``, kept by the caller across the entries of a metric,
+    which share their factors).
 
     ``m1 l1 l2 cos(q1) cos(q2) + m2 l1 l2 cos(q1) cos(q2)`` becomes
     ``l1 l2 (m1 + m2) cos(q1) cos(q2)``: fewer operations, same value.
     """
     groups: dict[tuple, list[tuple[sp.Expr, list[sp.Expr]]]] = defaultdict(list)
-    depends: dict[sp.Expr, bool] = {}
+    if depends is None:
+        depends = {}
     for num, factors in terms:
         on: list[sp.Expr] = []
         off: list[sp.Expr] = []
         for f in factors:
             hit = depends.get(f)
             if hit is None:
-                hit = depends[f] = not q.isdisjoint(f.free_symbols)
+                hit = depends[f] = not q.isdisjoint(free_symbols(f))
             (on if hit else off).append(f)
         groups[tuple(sorted(on, key=hash))].append((num, off))
     return add(*[_common_factor_sum(items, dep) for dep, items in groups.items()])
@@ -232,8 +238,9 @@ def metric_from_kinetic_energy(
     n = len(v)
     qset = frozenset(q)
     G = sp.zeros(n, n)
+    depends: dict[sp.Expr, bool] = {}
     for (i, j), terms in out.items():
-        G[i, j] = G[j, i] = group_by_factor(terms, qset)
+        G[i, j] = G[j, i] = group_by_factor(terms, qset, depends)
     return G
 
 
