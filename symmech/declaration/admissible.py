@@ -30,7 +30,7 @@ its derivatives, and generated code takes their values as inputs.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
@@ -112,11 +112,36 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
         """``entry [i,j] = ...: `` for a matrix (the first entry the problem was seen in)."""
         return f"entry [{k // cols},{k % cols}] = {_short(entries[k])}: " if cols else ""
 
-    skip = tuple(skip)
-    # kind -> (first entry index, names found)
-    found: dict[str, tuple[int, dict[str, None]]] = {}
+    found, ranged = _walk(entries, tuple(skip))
+    out = _phrases(found, where)
+    if out:
+        return out
+    for k, e in enumerate(entries):
+        # sympy merges small rationals into a small rational; anything else is judged
+        bad = constant_out_of_range(e) if k in ranged else None
+        if bad is not None:
+            what = (
+                f"the constant {_short(bad.constant)}"
+                if bad.context == bad.constant
+                else f"the coefficient {_short(bad.constant)} (of {_short(bad.context)},"
+                " as sympy merged it)"
+            )
+            return [f"{where(k)}holds {what}, {bad.reason}"]
+    return []
+
+
+#: What :func:`_walk` found: kind -> (the first entry it was seen in, the names found).
+_Found = dict[str, tuple[int, dict[str, None]]]
+
+
+def _walk(entries: list, skip: tuple[type, ...]) -> tuple[_Found, set[int]]:
+    """One walk of ``entries`` (each shared subtree once): what they hold that a field may
+    not, by kind (``imaginary``, ``nonreal``, ``infinite``, ``unsupported``,
+    ``unevaluated``), and the entries holding constants other than small rationals (to be
+    judged by :func:`constant_out_of_range`)."""
+    found: _Found = {}
     seen: set[sp.Basic] = set()
-    ranged: set[int] = set()  # entries holding constants other than small rationals
+    ranged: set[int] = set()
 
     def note(kind: str, k: int, name: str = "") -> None:
         found.setdefault(kind, (k, {}))[1][name] = None
@@ -131,23 +156,11 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
             if skip and isinstance(e, skip):
                 continue
             if e.is_Atom:
-                if e is sp.I:
-                    note("imaginary", k)
-                elif e in _NOT_FINITE:
-                    note("infinite", k)
-                elif not (e.is_Symbol or e.is_Number or e.is_NumberSymbol):
-                    note("unsupported", k, _name(e))
-                elif e.is_Symbol and e.is_extended_real is False:
-                    note("nonreal", k, _short(e))
-                elif not e.is_Symbol and not _small_rational(e):
-                    # a float, pi, a large rational: merged constants may leave float64
-                    ranged.add(k)
-                continue
-            if isinstance(e, sp.Derivative):
+                _atom(e, k, note, ranged)
+            elif isinstance(e, sp.Derivative):
                 if not isinstance(e.expr, AppliedUndef):
                     note("unevaluated", k, "Derivative (of a known expression)")
-                continue
-            if (
+            elif (
                 isinstance(e, (AppliedUndef, *ELEMENTARY_FUNCTIONS))
                 or e.is_Add
                 or e.is_Mul
@@ -160,6 +173,28 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
                 note("unevaluated", k, _name(e))
             else:
                 note("unsupported", k, _name(e))
+    return found, ranged
+
+
+def _atom(e: sp.Basic, k: int, note: Callable[..., None], ranged: set[int]) -> None:
+    """An atom of entry ``k``: the imaginary unit, an infinity, an unsupported atom or a
+    symbol declared non-real is noted; a constant other than a small rational marks the
+    entry to be judged for its range (merged constants may leave float64)."""
+    if e is sp.I:
+        note("imaginary", k)
+    elif e in _NOT_FINITE:
+        note("infinite", k)
+    elif not (e.is_Symbol or e.is_Number or e.is_NumberSymbol):
+        note("unsupported", k, _name(e))
+    elif e.is_Symbol and e.is_extended_real is False:
+        note("nonreal", k, _short(e))
+    elif not e.is_Symbol and not _small_rational(e):
+        ranged.add(k)  # a float, pi, a large rational
+
+
+def _phrases(found: _Found, where: Callable[[int], str]) -> list[str]:
+    """The phrase of each kind :func:`_walk` found, in a fixed order, each naming the
+    first entry it was seen in (``where``)."""
     out = []
     if "imaginary" in found:
         out.append(f"{where(found['imaginary'][0])}is not real: it holds the imaginary unit I")
@@ -187,20 +222,7 @@ def expression_problems(expr: sp.Basic | sp.MatrixBase, skip: Iterable[type] = (
             f"{where(k)}holds an unevaluated {', '.join(names)}; write the expression it"
             " stands for (or an undefined sympy.Function)"
         )
-    if out:
-        return out
-    for k, e in enumerate(entries):
-        # sympy merges small rationals into a small rational; anything else is judged
-        bad = constant_out_of_range(e) if k in ranged else None
-        if bad is not None:
-            what = (
-                f"the constant {_short(bad.constant)}"
-                if bad.context == bad.constant
-                else f"the coefficient {_short(bad.constant)} (of {_short(bad.context)},"
-                " as sympy merged it)"
-            )
-            return [f"{where(k)}holds {what}, {bad.reason}"]
-    return []
+    return out
 
 
 def _small_rational(e: sp.Basic) -> bool:
