@@ -171,14 +171,38 @@ def derivation(
     progress("forcing")
     rep.add("forcing f (M v_dot = f + mu^T lambda)", scene.forcing())
     detailed = full or scene.n <= MAX_DETAILED_N
+    _add_connection(rep, scene, detailed, progress)
+    if scene.is_constrained:
+        progress("projectors and multipliers")
+        rep.add("constraint one-forms mu (rows; mu v = 0)", scene.constraint_matrix)
+        rep.add("projector P onto the constraint distribution D", scene.projectors()[0])
+        rep.add("multipliers lambda", scene.multipliers())
+    title = "constrained acceleration" if scene.is_constrained else "acceleration"
+    if detailed:
+        progress("acceleration")
+        rep.add(f"{title} v_dot", scene.acceleration())
+    else:
+        why = f"it needs the inverse of the {scene.n} x {scene.n} mass matrix"
+        rep.add(f"{title} v_dot", _left_out(scene.n, why))
+    for wall in scene.walls:
+        _add_wall(rep, scene, wall, progress)
+    return rep
+
+
+def _add_connection(
+    rep: Derivation, scene: Scene, detailed: bool, progress: Callable[[str], None]
+) -> None:
+    """The non-zero Christoffel symbols (coordinates: of the second kind for a diagonal
+    metric, else of the first) or connection coefficients (a frame), or a note that they
+    are left out (not ``detailed``)."""
+    q, v = scene.coordinates, scene.velocities
     if not detailed:
         what = "Christoffel symbols" if scene.frame is None else "connection coefficients"
         count = scene.n**2 * (scene.n + 1) // 2
         rep.add(what, _left_out(scene.n, f"up to {count} non-zero entries"))
     elif scene.frame is None:
         # the second kind needs g^-1: only for a diagonal metric (cheap and readable)
-        M = scene.mass_matrix()
-        kind = 2 if M.is_diagonal() else 1
+        kind = 2 if scene.mass_matrix().is_diagonal() else 1
         progress(f"Christoffel symbols (kind {kind})")
         gam = scene.christoffel(kind=kind)
         entries = [
@@ -211,35 +235,26 @@ def derivation(
             if omega[k, i, j] != 0
         ]
         rep.add("connection coefficients omega^m_ij of the frame (non-zero)", entries)
-    if scene.is_constrained:
-        progress("projectors and multipliers")
-        rep.add("constraint one-forms mu (rows; mu v = 0)", scene.constraint_matrix)
-        rep.add("projector P onto the constraint distribution D", scene.projectors()[0])
-        rep.add("multipliers lambda", scene.multipliers())
-    title = "constrained acceleration" if scene.is_constrained else "acceleration"
-    if detailed:
-        progress("acceleration")
-        rep.add(f"{title} v_dot", scene.acceleration())
+
+
+def _add_wall(rep: Derivation, scene: Scene, wall: Any, progress: Callable[[str], None]) -> None:
+    """A wall's gap, its post-impact velocity, and its Carnot residual (Newton law) or
+    energy change (energy law)."""
+    progress(f"impact map of wall {wall.name!r}")
+    imp = scene.impact_map(wall.index)
+    rep.add(f"wall {wall.name!r}: gap psi (psi >= 0 admissible)", wall.psi)
+    rep.add(
+        f"wall {wall.name!r}: post-impact velocity v+ ({wall.law} law, restitution"
+        f" {wall.restitution})",
+        imp.post_velocity,
+    )
+    if wall.law == "newton":
+        progress(f"Carnot residual of wall {wall.name!r}")
+        res = imp.carnot()
+        rep.add(f"wall {wall.name!r}: {res.theorem} residual (0 when it holds)", res.residual)
     else:
-        why = f"it needs the inverse of the {scene.n} x {scene.n} mass matrix"
-        rep.add(f"{title} v_dot", _left_out(scene.n, why))
-    for wall in scene.walls:
-        progress(f"impact map of wall {wall.name!r}")
-        imp = scene.impact_map(wall.index)
-        rep.add(f"wall {wall.name!r}: gap psi (psi >= 0 admissible)", wall.psi)
+        progress(f"energy change of wall {wall.name!r}")
         rep.add(
-            f"wall {wall.name!r}: post-impact velocity v+ ({wall.law} law, restitution"
-            f" {wall.restitution})",
-            imp.post_velocity,
+            f"wall {wall.name!r}: energy change T(v+) - T(v-) (energy law)",
+            sp.simplify(imp.energy_change()),
         )
-        if wall.law == "newton":
-            progress(f"Carnot residual of wall {wall.name!r}")
-            res = imp.carnot()
-            rep.add(f"wall {wall.name!r}: {res.theorem} residual (0 when it holds)", res.residual)
-        else:
-            progress(f"energy change of wall {wall.name!r}")
-            rep.add(
-                f"wall {wall.name!r}: energy change T(v+) - T(v-) (energy law)",
-                sp.simplify(imp.energy_change()),
-            )
-    return rep
