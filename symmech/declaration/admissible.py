@@ -84,7 +84,7 @@ NON_SMOOTH = (
     sp.arg,
 )
 
-_NOT_FINITE = (sp.oo, -sp.oo, sp.zoo, sp.nan)
+_NOT_FINITE = frozenset((sp.oo, -sp.oo, sp.zoo, sp.nan))  # by hash: an atom is compared once
 
 
 def _name(node: sp.Basic) -> str:
