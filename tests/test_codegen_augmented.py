@@ -101,16 +101,11 @@ def test_augmented_rhs_is_asked_for_by_name():
 def test_the_python_loops_take_it(monkeypatch):
     """A run of the NumPy loop through augmented_rhs gives what the path without it (rhs,
     then each wall's gradient) gives, to rounding."""
-    import symmech.simulate as simulate
     from symmech.bench.cases import CASES
     from symmech.simulate import functions
 
-    case = CASES["ellipse_gravity_flight"]
-
     def run():
-        return simulate.simulate(
-            case.scene(), case.q0, case.v0, case.t_end, params=case.params(), backend="numpy"
-        )
+        return CASES["ellipse_gravity_flight"].simulate(backend="numpy")
 
     made = []
     kernel = functions._generated_kernel

@@ -198,7 +198,6 @@ def test_searches_on_the_coordinates_give_the_same_run(monkeypatch, backend, met
     without it (the states through ``dense`` and ``many``) the run is the same, bit for
     bit: the ellipse bouncing on its floor, and the disc rolling (a contact force searched
     through the whole state)."""
-    import symmech.simulate as simulate
     from symmech.bench.cases import CASES
     from symmech.simulate import scipy_flow, steppers
 
@@ -208,18 +207,7 @@ def test_searches_on_the_coordinates_give_the_same_run(monkeypatch, backend, met
     def runs() -> list:
         out = []
         for name in ("ellipse_gravity_flight", "disk_3_7_gravity"):
-            case = CASES[name]
-            res = simulate.simulate(
-                case.scene(),
-                case.q0,
-                case.v0,
-                case.t_end,
-                params=case.params(),
-                backend=backend,
-                method=method,
-                rtol=1e-4,
-                atol=1e-6,
-            )
+            res = CASES[name].simulate(backend=backend, method=method, rtol=1e-4, atol=1e-6)
             out.append((res.t, res.q, res.v, [(e.time, e.wall, e.kind) for e in res.events]))
         return out
 

@@ -16,7 +16,6 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-import symmech.simulate as simulate
 from symmech.bench.cases import CASES
 from symmech.simulate import detection
 from symmech.simulate.detection import StepSearch, _no_minimum
@@ -26,18 +25,7 @@ ROUTES = [("numpy", "dop853"), ("numpy", "rk45"), ("scipy", "DOP853"), ("scipy",
 
 
 def _run(name: str, backend: str, method: str, rtol: float) -> tuple:
-    case = CASES[name]
-    res = simulate.simulate(
-        case.scene(),
-        case.q0,
-        case.v0,
-        case.t_end,
-        params=case.params(),
-        backend=backend,
-        method=method,
-        rtol=rtol,
-        atol=rtol / 100,
-    )
+    res = CASES[name].simulate(backend=backend, method=method, rtol=rtol, atol=rtol / 100)
     dense = res.sol(np.linspace(0.0, res.t[-1], 57))  # the steps' continuous output
     return res.status, res.t, res.y, [(e.time, e.wall, e.kind) for e in res.events], dense
 

@@ -7,13 +7,19 @@ file (``symmech/scenes/*.toml``), overridden where a case needs another value.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import TYPE_CHECKING, Any
 
 from symmech.errors import SymmechError
 from symmech.scene import Scene
-from symmech.scenefile import read_scene
+from symmech.scenefile import SceneFile, read_scene
+
+if TYPE_CHECKING:
+    from symmech.simulate.result import SimulationResult
 
 __all__ = ["CASES", "Case", "bouncing_ball_state", "bouncing_ball_times", "case"]
 
@@ -36,15 +42,32 @@ class Case:
         return self.label or self.scene_name
 
     def scene(self) -> Scene:
-        """The scene (loaded from its built-in scene file)."""
-        return read_scene(self.scene_name).scene
+        """The scene (loaded from its built-in scene file, once)."""
+        return _built_in(self.scene_name).scene
 
     def params(self) -> dict[str, float]:
         """The scene file's defaults with this case's overrides."""
-        defaults = read_scene(self.scene_name).defaults
-        out = {str(k): float(v) for k, v in defaults.items()}
-        out.update(self.overrides)
-        return out
+        return {**_defaults(self.scene_name), **self.overrides}
+
+    def simulate(self, **options: Any) -> SimulationResult:
+        """The case run by :func:`symmech.simulate` from ``q0``, ``v0`` to ``t_end`` at its
+        parameters; ``options`` as there (``backend``, ``method``, ``rtol``, ...)."""
+        from symmech.simulate import simulate
+
+        return simulate(self.scene(), self.q0, self.v0, self.t_end, params=self.params(), **options)
+
+
+@functools.cache
+def _built_in(name: str) -> SceneFile:
+    """The built-in scene file ``name``, read once (reading it declares the scene, some
+    milliseconds; a benchmark runs its case many times)."""
+    return read_scene(name)
+
+
+@functools.cache
+def _defaults(name: str) -> Mapping[str, float]:
+    """The parameter defaults of the built-in scene file ``name`` as floats."""
+    return MappingProxyType({str(k): float(v) for k, v in _built_in(name).defaults.items()})
 
 
 CASES: dict[str, Case] = {

@@ -25,7 +25,6 @@ from typing import Any
 
 import numpy as np
 
-import symmech.simulate as simulate_pkg
 from symmech.bench.baseline import baseline_run, prepare
 from symmech.bench.cases import Case, bouncing_ball_state, bouncing_ball_times
 from symmech.errors import SymmechError
@@ -150,17 +149,7 @@ def measure(
     first = True  # the first run compiles and loads: not timed
     while first or _more(seconds, repeats):
         clock = time.perf_counter()
-        res = simulate_pkg.simulate(
-            scene,
-            case.q0,
-            case.v0,
-            case.t_end,
-            params=params,
-            backend=route,
-            method=method,
-            rtol=rtol,
-            atol=atol,
-        )
+        res = case.simulate(backend=route, method=method, rtol=rtol, atol=atol)
         if first:
             first = False
             continue
