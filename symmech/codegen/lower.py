@@ -236,7 +236,17 @@ def lower(
     scalar_body = None
     if scalar is not None and not (takes_t or takes_u):
         scalar_body = _scalar_body(
-            f, plan.n, unpack, replacements, where, final, program, check, table, scalar, callee
+            f,
+            plan.n,
+            unpack,
+            replacements,
+            where,
+            final,
+            program,
+            check,
+            table,
+            scalar,
+            (callee, call_stop),
         )
     return LoweredFunction(
         name=f.name,
@@ -465,14 +475,15 @@ def _scalar_body(
     check: bool,
     table: Mapping[sp.Symbol, str],
     scalar: tuple[Callable[[Mapping[sp.Symbol, str]], sp.printing.printer.Printer], Dialect],
-    callee: LoweredFunction | None,
+    call: tuple[LoweredFunction | None, int | None],
 ) -> tuple[str, ...] | None:
     """The body of the one-state variant ``_one_<name>`` of a NumPy function: the same
     expressions, operations and order on plain floats (the state arrays and p as lists),
     ``math`` in place of ``numpy``, the output a list (``return out`` follows).  None when
     it cannot be printed so (a function ``math`` lacks, a local block, a callee without a
-    variant)."""
+    variant).  ``call``: the callee and the end of the entries it writes (``call_stop``)."""
     make_printer, dialect = scalar
+    callee, stop = call
     if callee is not None and callee.scalar is None:
         return None
     if f.part_of is not None and callee is not None:
@@ -509,7 +520,6 @@ def _scalar_body(
             lines += dialect.lines(program, f.out_shape, exprs)
     if callee is not None:
         args = ", ".join(callee.arguments)
-        stop = _call_stop(f, n, callee)
         lines.append(f"out[{n}:{'' if stop is None else stop}] = _one_{callee.name}({args})")
     return tuple(lines)
 
