@@ -121,10 +121,6 @@ class ScipyFlow:
         # (LSODA exposes none: twice its last step, which it cuts back if need be)
         self.h = getattr(s, "h_abs", None) or 2 * s.step_size or self.h
         dense = _LazyDense(s, self._nodes)
-
-        def continuous(tt: float) -> np.ndarray:
-            return dense()(tt)
-
         many = head = None
         if isinstance(s, self._dop853):  # element by element, as one call
 
@@ -132,13 +128,13 @@ class ScipyFlow:
                 return dense()(np.asarray(ts, dtype=float)).T
 
             head = _scipy_head(dense)
-            if head is not None and s.n <= FLOAT_LOOP_SIZE:  # one time: on floats
-                whole, size = head, s.n
+        # a state at one time of a small system: its entries on floats (the same values)
+        whole, size = (head, s.n) if head is not None and s.n <= FLOAT_LOOP_SIZE else (None, 0)
 
-                def continuous(tt: float) -> np.ndarray:
-                    if isinstance(tt, float):
-                        return np.array(whole(tt, size))
-                    return dense()(tt)
+        def continuous(tt: float) -> np.ndarray:
+            if whole is not None and isinstance(tt, float):
+                return np.array(whole(tt, size))
+            return dense()(tt)
 
         return Segment(t0, float(s.t), y0, s.y.copy(), None, continuous, many, head, dense.stages)
 
